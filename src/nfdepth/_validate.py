@@ -1,0 +1,120 @@
+"""Input validation shared by the public functions (private).
+
+Every check raises ``ValueError`` or ``TypeError`` with a message that names
+the parameter, what arrived and what was expected.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+_FLOAT_DTYPES = (np.float32, np.float64)
+
+
+class NFDepthError(ValueError):
+    """Base class of nfdepth's own errors (a ``ValueError``)."""
+
+
+def check_positive_finite(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a finite number > 0."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be a positive finite number, got {value!r}"
+        raise TypeError(msg) from None
+    if not np.isfinite(number) or number <= 0:
+        msg = f"{name} must be a positive finite number, got {value!r}"
+        raise ValueError(msg)
+    return number
+
+
+def check_nonnegative_finite(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a finite number >= 0."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be a finite number >= 0, got {value!r}"
+        raise TypeError(msg) from None
+    if not np.isfinite(number) or number < 0:
+        msg = f"{name} must be a finite number >= 0, got {value!r}"
+        raise ValueError(msg)
+    return number
+
+
+def as_vector3(name: str, value) -> np.ndarray:
+    """Return ``value`` as a finite float64 vector of length 3."""
+    try:
+        vec = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        msg = f"{name} must be 3 numbers, got {value!r}"
+        raise TypeError(msg) from None
+    if vec.shape != (3,):
+        msg = f"{name} must have shape (3,), got shape {vec.shape}"
+        raise ValueError(msg)
+    if not np.all(np.isfinite(vec)):
+        msg = f"{name} must be finite, got {vec.tolist()}"
+        raise ValueError(msg)
+    return vec
+
+
+def float_dtype(dtype) -> np.dtype:
+    """Validate a requested float dtype (float32 or float64)."""
+    dt = np.dtype(dtype)
+    if dt not in (np.dtype(np.float32), np.dtype(np.float64)):
+        msg = f"dtype={dt} is not supported; use float32 or float64"
+        raise ValueError(msg)
+    return dt
+
+
+def as_image(name: str, image, dtype=np.float32) -> np.ndarray:
+    """Validate one 2-D grey image: real, finite, at least 2x2; return as ``dtype``."""
+    arr = np.asarray(image)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        msg = f"{name} must be a numeric 2-D array, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    if np.iscomplexobj(arr):
+        msg = f"{name} must be real, got complex dtype {arr.dtype}"
+        raise TypeError(msg)
+    if arr.ndim != 2:
+        msg = f"{name} must be a 2-D grey image (rows, cols), got shape {arr.shape}"
+        if arr.ndim == 3 and arr.shape[-1] in (3, 4):
+            msg += "; convert colour to grey first (nfdepth.io.to_grey)"
+        raise ValueError(msg)
+    if arr.shape[0] < 2 or arr.shape[1] < 2:
+        msg = f"{name} must be at least 2x2 pixels, got shape {arr.shape}"
+        raise ValueError(msg)
+    out = arr.astype(float_dtype(dtype), copy=False)
+    if not np.all(np.isfinite(out)):
+        bad = int(np.count_nonzero(~np.isfinite(out)))
+        msg = f"{name} contains {bad} non-finite (NaN or inf) pixel(s); expected finite intensities"
+        raise ValueError(msg)
+    return out
+
+
+def as_frames(name: str, frames, count: int | None = None, *, min_count: int = 1, dtype=np.float32) -> list[np.ndarray]:
+    """Validate a sequence of same-shape 2-D images (or a 3-D array of them)."""
+    if isinstance(frames, np.ndarray):
+        if frames.ndim != 3:
+            msg = f"{name} must be a sequence of 2-D images or an array of shape (N, rows, cols), got shape {frames.shape}"
+            raise ValueError(msg)
+        seq: Sequence = list(frames)
+    elif isinstance(frames, (list, tuple)):
+        seq = frames
+    else:
+        msg = f"{name} must be a sequence of 2-D arrays, got {type(frames).__name__}"
+        raise TypeError(msg)
+    if count is not None and len(seq) != count:
+        msg = f"{name} must hold exactly {count} frames, got {len(seq)}"
+        raise ValueError(msg)
+    if len(seq) < min_count:
+        msg = f"{name} must hold at least {min_count} frames, got {len(seq)}"
+        raise ValueError(msg)
+    out = [as_image(f"{name}[{i}]", f, dtype) for i, f in enumerate(seq)]
+    shapes = {f.shape for f in out}
+    if len(shapes) > 1:
+        listed = ", ".join(str(f.shape) for f in out)
+        msg = f"{name} must all have the same shape, got {listed}"
+        raise ValueError(msg)
+    return out

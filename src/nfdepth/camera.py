@@ -1,0 +1,212 @@
+"""Pinhole camera and rigid-motion model (paper eq. 1, 3, 4).
+
+Conventions (see ``docs/conventions.md``): image arrays are ``I[row, col]``;
+``col`` grows to the right, ``row`` downward; camera frame X right, Y down,
+Z forward. A point ``(X, Y, Z)`` projects to normalised ``x = X/Z``,
+``y = Y/Z`` and to pixel ``col = cx + f x``, ``row = cy + f y``.
+
+``(V, Omega)`` is the motion of the *scene relative to the camera*, in camera
+coordinates: a scene point moves as ``dP/dt = V + Omega x P``. A camera that
+translates by ``T`` per unit time through a static scene sees ``V = -T``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validate import as_vector3, check_positive_finite
+
+__all__ = [
+    "PinholeCamera",
+    "RigidMotion",
+    "image_flow",
+    "image_flow_px",
+    "normal_flow_px",
+    "relative_normal_flow_coefficients",
+]
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """Pinhole camera with focal length and principal point in pixels.
+
+    Parameters
+    ----------
+    focal_px : float
+        Focal length ``f`` in pixels (> 0).
+    width_px, height_px : int
+        Image size in pixels.
+    cx_px, cy_px : float, optional
+        Principal point (column, row) in pixels; default the image centre
+        ``((W-1)/2, (H-1)/2)``.
+    """
+
+    focal_px: float
+    width_px: int
+    height_px: int
+    cx_px: float | None = None
+    cy_px: float | None = None
+
+    def __post_init__(self) -> None:
+        check_positive_finite("focal_px", self.focal_px)
+        for name in ("width_px", "height_px"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or value < 1:
+                msg = f"{name} must be a positive integer, got {value!r}"
+                raise ValueError(msg)
+        if self.cx_px is None:
+            object.__setattr__(self, "cx_px", (self.width_px - 1) / 2.0)
+        if self.cy_px is None:
+            object.__setattr__(self, "cy_px", (self.height_px - 1) / 2.0)
+        for name in ("cx_px", "cy_px"):
+            if not np.isfinite(getattr(self, name)):
+                msg = f"{name} must be finite, got {getattr(self, name)!r}"
+                raise ValueError(msg)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image shape ``(rows, cols)``."""
+        return (int(self.height_px), int(self.width_px))
+
+    def to_normalized(self, rows, cols):
+        """Pixel ``(row, col)`` to normalised image coordinates ``(x, y)``."""
+        x = (np.asarray(cols, dtype=float) - self.cx_px) / self.focal_px
+        y = (np.asarray(rows, dtype=float) - self.cy_px) / self.focal_px
+        return x, y
+
+    def to_pixel(self, x, y):
+        """Normalised ``(x, y)`` to pixel ``(row, col)``."""
+        rows = self.cy_px + self.focal_px * np.asarray(y, dtype=float)
+        cols = self.cx_px + self.focal_px * np.asarray(x, dtype=float)
+        return rows, cols
+
+    def project(self, points):
+        """Project camera-frame points, shape ``(..., 3)``, to ``(row, col, Z)``."""
+        points = np.asarray(points, dtype=float)
+        if points.shape[-1] != 3:
+            msg = f"points must have shape (..., 3), got {points.shape}"
+            raise ValueError(msg)
+        z = points[..., 2]
+        rows, cols = self.to_pixel(points[..., 0] / z, points[..., 1] / z)
+        return rows, cols, z
+
+    def back_project(self, rows, cols, depth):
+        """Pixel positions and depth Z to camera-frame points, shape ``(..., 3)``."""
+        x, y = self.to_normalized(rows, cols)
+        depth = np.asarray(depth, dtype=float)
+        return np.stack(np.broadcast_arrays(x * depth, y * depth, depth), axis=-1)
+
+
+@dataclass(frozen=True)
+class RigidMotion:
+    """Instantaneous rigid motion ``(V, Omega)`` of the scene relative to a camera.
+
+    ``translation`` is ``V`` in scene units per unit time; ``rotation`` is
+    ``Omega`` in radians per unit time, both in camera coordinates, so that a
+    scene point moves as ``dP/dt = V + Omega x P`` (paper eq. 1).
+    """
+
+    translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "translation", as_vector3("translation", self.translation))
+        object.__setattr__(self, "rotation", as_vector3("rotation", self.rotation))
+
+    @classmethod
+    def about_center(cls, *, rotation, center, translation=(0.0, 0.0, 0.0)) -> RigidMotion:
+        """Rotation ``rotation`` (rad/unit time) about an axis through ``center``.
+
+        ``dP/dt = translation + rotation x (P - center)``, i.e.
+        ``V = translation - rotation x center``.
+        """
+        rotation = as_vector3("rotation", rotation)
+        center = as_vector3("center", center)
+        translation = as_vector3("translation", translation)
+        return cls(translation - np.cross(rotation, center), rotation)
+
+    @classmethod
+    def camera_translation(cls, velocity) -> RigidMotion:
+        """Scene motion seen by a camera translating with ``velocity`` (V = -T)."""
+        return cls(-as_vector3("velocity", velocity), np.zeros(3))
+
+    def __add__(self, other: RigidMotion) -> RigidMotion:
+        return RigidMotion(self.translation + other.translation, self.rotation + other.rotation)
+
+    def __sub__(self, other: RigidMotion) -> RigidMotion:
+        """Relative motion ``(V_m - V_s, Omega_m - Omega_s)`` (paper eq. 2, 4)."""
+        return RigidMotion(self.translation - other.translation, self.rotation - other.rotation)
+
+    def __neg__(self) -> RigidMotion:
+        return RigidMotion(-self.translation, -self.rotation)
+
+    def scaled(self, factor: float) -> RigidMotion:
+        """Motion over ``factor`` units of time (or with velocities times ``factor``)."""
+        return RigidMotion(self.translation * factor, self.rotation * factor)
+
+    @property
+    def is_pure_rotation(self) -> bool:
+        """True when the translation is exactly zero (depth cannot be recovered)."""
+        return not np.any(self.translation)
+
+
+def _rotational_flow(x, y, omega):
+    wx, wy, wz = omega
+    u = -wx * x * y + wy * (1.0 + x * x) - wz * y
+    v = -wx * (1.0 + y * y) + wy * x * y + wz * x
+    return u, v
+
+
+def image_flow(x, y, inverse_depth, motion: RigidMotion):
+    """Image flow ``(u, v)`` in normalised units per unit time (paper eq. 1).
+
+    .. math::
+        u = -\\Omega_X x y + \\Omega_Y (1 + x^2) - \\Omega_Z y + (V_X - x V_Z)/Z
+
+        v = -\\Omega_X (1 + y^2) + \\Omega_Y x y + \\Omega_Z x + (V_Y - y V_Z)/Z
+
+    ``inverse_depth`` is ``1/Z`` (0 for points at infinity).
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    rho = np.asarray(inverse_depth, dtype=float)
+    vx, vy, vz = motion.translation
+    ur, vr = _rotational_flow(x, y, motion.rotation)
+    return ur + (vx - x * vz) * rho, vr + (vy - y * vz) * rho
+
+
+def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion):
+    """Image flow in pixels per unit time at pixel positions with depth ``Z``.
+
+    Returns ``(flow_col, flow_row)``: eq. 1 multiplied by the focal length.
+    """
+    x, y = camera.to_normalized(rows, cols)
+    with np.errstate(divide="ignore"):
+        rho = 1.0 / np.asarray(depth, dtype=float)
+    u, v = image_flow(x, y, rho, motion)
+    return camera.focal_px * u, camera.focal_px * v
+
+
+def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: RigidMotion):
+    """Normal flow ``Vn = u cos(alpha) + v sin(alpha)`` in px per unit time (eq. 3)."""
+    fu, fv = image_flow_px(camera, rows, cols, depth, motion)
+    return fu * np.cos(alpha) + fv * np.sin(alpha)
+
+
+def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, relative_motion: RigidMotion):
+    """Coefficients of paper eq. 4 written as ``dVn = A + B / Z`` (px per unit time).
+
+    ``A = f * (rotational flow of dOmega) . n`` and
+    ``B = f * (dVx - x dVz, dVy - y dVz) . n`` with ``n = (cos alpha, sin alpha)``.
+    Inverse depth follows as ``rho = (dVn - A) / B`` where ``B != 0``.
+    """
+    x, y = camera.to_normalized(rows, cols)
+    c, s = np.cos(alpha), np.sin(alpha)
+    ur, vr = _rotational_flow(x, y, relative_motion.rotation)
+    vx, vy, vz = relative_motion.translation
+    f = camera.focal_px
+    a = f * (ur * c + vr * s)
+    b = f * ((vx - x * vz) * c + (vy - y * vz) * s)
+    return np.asarray(a, dtype=float), np.asarray(b, dtype=float)

@@ -1,0 +1,244 @@
+"""The ``nfdepth`` command line: a thin layer over the library.
+
+Errors are one line on stderr and a distinct exit code (``--debug`` shows
+the traceback):
+
+====  ==========================================================
+code  meaning
+====  ==========================================================
+0     success
+1     unexpected internal error (a bug: please report it)
+2     bad argument or bad input value
+3     an input file could not be read
+4     an output could not be written, or exists (use ``--force``)
+5     data set not found
+130   interrupted (Ctrl-C); no partial output is left behind
+====  ==========================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["main", "build_parser"]
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_USAGE = 2
+EXIT_READ = 3
+EXIT_WRITE = 4
+EXIT_DATA = 5
+EXIT_INTERRUPTED = 130
+
+
+class CLIError(Exception):
+    """An error with its exit code, reported as one line."""
+
+    def __init__(self, message: str, code: int = EXIT_USAGE):
+        super().__init__(message)
+        self.code = code
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit code 2, no usage dump
+        raise CLIError(f"{self.prog}: {message}", EXIT_USAGE)
+
+
+def _classify(exc: BaseException) -> int:
+    name = type(exc).__name__
+    if name in ("ImageReadError",):
+        return EXIT_READ
+    if name in ("OutputExistsError", "OutputWriteError"):
+        return EXIT_WRITE
+    if name == "DataNotFoundError":
+        return EXIT_DATA
+    if isinstance(exc, (ValueError, TypeError)):
+        return EXIT_USAGE
+    if isinstance(exc, FileNotFoundError):
+        return EXIT_READ
+    if isinstance(exc, PermissionError):
+        return EXIT_WRITE
+    if isinstance(exc, OSError):
+        return EXIT_WRITE
+    return EXIT_INTERNAL
+
+
+# ----------------------------------------------------------------- reproduce
+
+
+def _fmt(value: float) -> str:
+    return "   nan" if not np.isfinite(value) else f"{value:6.4f}"
+
+
+def _reproduce_table(results, literal=None) -> str:
+    from .experiments import PAPER_REPORTED
+
+    head = f"{'experiment':<10} {'points':>6} {'paper max':>9} | {'flow max':>8} {'p95':>6} {'median':>6} | {'depth max':>9} {'median':>6}"
+    if literal is not None:
+        head += f" | {'literal-stencil max':>19} {'median':>6}"
+    lines = [head, "-" * len(head)]
+    for name, res in results.items():
+        s = res.summary()
+        f, d = s["flow_rel_error"], s["depth_rel_error"]
+        paper = PAPER_REPORTED[name]
+        paper_txt = f"<{paper:.2f}" if name == "static" else f"{paper:.2f}"
+        line = (
+            f"{name:<10} {s['points']:>6} {paper_txt:>9} | {_fmt(f['max']):>8} {_fmt(f['p95'])} {_fmt(f['median'])} |"
+            f" {_fmt(d['max']):>9} {_fmt(d['median'])}"
+        )
+        if literal is not None:
+            lf = literal[name].summary()["flow_rel_error"]
+            line += f" | {_fmt(lf['max']):>19} {_fmt(lf['median'])}"
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def _write_paper_figures(out_dir: Path, res) -> list[Path]:
+    from . import plot
+
+    scene, r = res.scene, res.result
+    shape = r.selection.mask.shape
+    frames = scene.frames
+    name = res.name
+    written = []
+    if name == "static":
+        ref = scene.reference_index
+        written.append(plot.save_figure(plot.image_panel(frames[ref], title=f"{name}: I{ref + 1}"), out_dir / f"{name}_a_image.png"))
+        written.append(plot.save_figure(plot.difference_panel(frames[ref - 1], frames[ref + 1], title=f"{name}: dp"), out_dir / f"{name}_a_dp.png"))
+        flows = {"Vn": r.delta_vn}
+    else:
+        written.append(plot.save_figure(plot.image_panel(frames[2], title=f"{name}: I3"), out_dir / f"{name}_a_I3.png"))
+        written.append(plot.save_figure(plot.difference_panel(frames[1], frames[3], title=f"{name}: dps (I4 - I2)"), out_dir / f"{name}_a_dps.png"))
+        written.append(plot.save_figure(plot.difference_panel(frames[0], frames[4], title=f"{name}: dpm (I5 - I1)"), out_dir / f"{name}_a_dpm.png"))
+        m = r.selection.mask
+        flows = {"Vnr": r.delta_vn, "Vns": r.flows["stationary"][m], "Vnm": r.flows["moving"][m]}
+    scale = None
+    for key, flow in flows.items():
+        fig = plot.needle_panel(r.rows, r.cols, r.alpha, flow, shape=shape, title=f"{name}: {key}", scale_px=scale)
+        written.append(plot.save_figure(fig, out_dir / f"{name}_b_{key}.png"))
+    fig = plot.edge_points_panel(r.rows, r.cols, shape=shape, valid=r.valid, title=f"{name}: edge points")
+    written.append(plot.save_figure(fig, out_dir / f"{name}_c_edges.png"))
+    true_pts = r.camera.back_project(r.rows, r.cols, res.true_depth)
+    fig = plot.yz_projection_panel(r.points, true_points=true_pts[r.valid], title=f"{name}: depth on the Y-Z plane")
+    written.append(plot.save_figure(fig, out_dir / f"{name}_d_yz.png"))
+    return written
+
+
+def _cmd_reproduce(args) -> int:
+    from .experiments import EXPERIMENTS, run_paper_experiment
+
+    if args.noise < 0 or not np.isfinite(args.noise):
+        raise CLIError(f"--noise must be a finite number >= 0, got {args.noise}")
+    names = EXPERIMENTS if not args.only else tuple(args.only)
+    results = {n: run_paper_experiment(n, stencil=args.stencil, noise_std=args.noise, seed=args.seed) for n in names}
+    literal = None
+    if args.stencil != "paper" and not args.no_compare:
+        literal = {n: run_paper_experiment(n, stencil="paper", noise_std=args.noise, seed=args.seed) for n in names}
+    print(f"Paper experiments (stencil={args.stencil}, noise std={args.noise:g}, seed={args.seed}); relative errors, corners excluded")
+    print(_reproduce_table(results, literal))
+    if args.json:
+        payload = {}
+        for n, res in results.items():
+            entry = res.summary()
+            entry["stencil"] = args.stencil
+            if literal is not None:
+                entry["literal_stencil"] = literal[n].summary()
+            payload[n] = entry
+        from .io import atomic_write
+
+        text = json.dumps(payload, indent=2)
+        atomic_write(Path(args.json), lambda fh: fh.write(text.encode()), force=True)
+        print(f"wrote {args.json}")
+    if args.out:
+        out = Path(args.out)
+        count = sum(len(_write_paper_figures(out, res)) for res in results.values())
+        print(f"wrote {count} figures to {out}/")
+    return EXIT_OK
+
+
+def _cmd_demo(args) -> int:
+    from .experiments import run_paper_experiment
+
+    out = Path(args.out)
+    print("nfdepth demo: the paper's pyramid, dynamic stereo (experiment 1) and static stereo")
+    for name in ("exp1", "static"):
+        res = run_paper_experiment(name)
+        s = res.summary()
+        z = res.result.depth[res.result.valid]
+        print(
+            f"  {name:<6}: {s['points']} edge points with depth in {s['runtime_s'] * 1000:.0f} ms; "
+            f"depth {np.nanmin(z):.0f}..{np.nanmax(z):.0f} (true 200..400); "
+            f"median depth error {100 * s['depth_rel_error']['median']:.2f} %, max {100 * s['depth_rel_error']['max']:.2f} %"
+        )
+        _write_paper_figures(out, res)
+    print(f"figures written to {out}/")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------- the parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``nfdepth`` (all sub-commands)."""
+    from . import __version__
+
+    parser = _Parser(prog="nfdepth", description="Depth from relative normal flow (dynamic and static stereo).")
+    parser.add_argument("--version", action="version", version=f"nfdepth {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the full traceback on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    p = sub.add_parser("demo", help="render the paper's pyramid scenes, recover depth, write figures")
+    p.add_argument("--out", default="nfdepth-demo", help="output folder for the figures (default ./nfdepth-demo)")
+    p.set_defaults(func=_cmd_demo)
+
+    p = sub.add_parser("reproduce", help="the paper's experiments 1-4 and static stereo, next to its numbers")
+    p.add_argument("--json", metavar="FILE", help="write the figures as JSON")
+    p.add_argument("--out", metavar="DIR", help="write the paper's figures as PNG files here")
+    p.add_argument("--stencil", choices=("matched", "simpson", "paper"), default="matched", help="gradient stencil (default matched)")
+    p.add_argument("--noise", type=float, default=0.0, metavar="STD", help="Gaussian image noise, grey levels")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise generator")
+    p.add_argument("--only", nargs="+", choices=("exp1", "exp2", "exp3", "exp4", "static"), help="run only these")
+    p.add_argument("--no-compare", action="store_true", help="skip the literal-stencil comparison column")
+    p.set_defaults(func=_cmd_reproduce)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``nfdepth`` command; returns the exit code."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    debug = "--debug" in argv
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return EXIT_USAGE
+        return int(args.func(args))
+    except SystemExit as exc:  # --help / --version
+        return int(exc.code or 0)
+    except KeyboardInterrupt:
+        print("nfdepth: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except CLIError as exc:
+        if debug:
+            raise
+        print(f"nfdepth: error: {exc}" if not str(exc).startswith("nfdepth") else f"{exc}".replace("nfdepth", "nfdepth: error:", 1), file=sys.stderr)
+        return exc.code
+    except Exception as exc:  # noqa: BLE001 - the CLI's single error boundary
+        if debug:
+            raise
+        code = _classify(exc)
+        text = " ".join(str(exc).split()) or type(exc).__name__
+        if code == EXIT_INTERNAL:
+            text = f"internal error ({type(exc).__name__}): {text}; rerun with --debug and report it"
+        print(f"nfdepth: error: {text}", file=sys.stderr)
+        return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

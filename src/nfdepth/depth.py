@@ -1,0 +1,223 @@
+"""Depth from relative normal flow (paper eq. 4, 5, 6).
+
+Per point, with everything in pixels per unit time (CONVENTIONS):
+
+.. math::
+    \\Delta V_n = A + B \\rho,\\qquad \\rho = 1/Z
+
+``A`` is the relative rotation's normal flow, ``B`` the relative
+translation's normal flow at unit inverse depth
+(:func:`nfdepth.camera.relative_normal_flow_coefficients`). Inverse depth is
+linear in the measurement, so several relative normal flows of one point
+(more cameras, x and y baselines) combine by weighted least squares, and the
+variance of ``rho`` is the variance of ``dVn`` divided by ``B**2``.
+
+Depth is *undeterminable* where the relative motion has no translation, or
+where the edge normal is (nearly) perpendicular to the translational flow:
+``|cos|`` of the angle between them below ``min_cos``. Such points, and
+points whose inverse depth is not positive (behind the camera or at
+infinity), get NaN and a reason code, never a number.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+import numpy as np
+
+from ._validate import check_nonnegative_finite, check_positive_finite
+from .camera import PinholeCamera, RigidMotion, relative_normal_flow_coefficients
+
+__all__ = [
+    "Reason",
+    "InverseDepth",
+    "solve_inverse_depth",
+    "depth_x_translation",
+    "depth_y_translation",
+    "depth_z_translation",
+    "fuse_inverse_depth",
+]
+
+
+class Reason(IntEnum):
+    """Why a point has no depth (0 = it has one)."""
+
+    OK = 0
+    NOT_EDGE = 1  #: not a strong zero-crossing edge point
+    CORNER = 2  #: gradient direction ill-defined
+    UNDETERMINABLE = 3  #: B ~ 0: no translation, or edge parallel to its flow
+    NOT_POSITIVE = 4  #: inverse depth <= 0: behind the camera or at infinity
+    UNCERTAIN = 5  #: uncertainty above the requested bound
+    NO_DATA = 6  #: no usable measurement (NaN input, outside the views)
+
+
+class InverseDepth:
+    """Inverse depth with its standard deviation and reason codes.
+
+    Attributes
+    ----------
+    rho : ndarray
+        Inverse depth ``1/Z`` in 1/scene-units, NaN where not valid.
+    rho_std : ndarray
+        Standard deviation of ``rho`` (NaN where not valid, or where no noise
+        level was given).
+    reason : ndarray of uint8
+        :class:`Reason` codes; 0 where ``rho`` is valid.
+    b : ndarray
+        The coefficient ``B`` (px per unit time per unit inverse depth).
+    """
+
+    def __init__(self, rho, rho_std, reason, b):
+        self.rho = rho
+        self.rho_std = rho_std
+        self.reason = reason
+        self.b = b
+
+    @property
+    def valid(self) -> np.ndarray:
+        """True where ``rho`` holds a number."""
+        return self.reason == Reason.OK
+
+    @property
+    def depth(self) -> np.ndarray:
+        """Depth ``Z = 1 / rho`` (NaN where not valid)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return 1.0 / self.rho
+
+    @property
+    def depth_std(self) -> np.ndarray:
+        """First-order standard deviation of ``Z``: ``rho_std / rho**2``."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.rho_std / self.rho**2
+
+
+def solve_inverse_depth(
+    delta_vn,
+    *,
+    camera: PinholeCamera,
+    rows,
+    cols,
+    alpha,
+    relative_motion: RigidMotion,
+    delta_vn_std=None,
+    min_cos: float = 0.25,
+) -> InverseDepth:
+    """Inverse depth from relative normal flow, general relative motion (eq. 4).
+
+    Parameters
+    ----------
+    delta_vn : array_like
+        Relative normal flow ``Vn_m - Vn_s`` in px per unit time.
+    camera : PinholeCamera
+        Intrinsics of the reference image.
+    rows, cols : array_like
+        Pixel positions of the points (broadcast with ``delta_vn``).
+    alpha : array_like
+        Normal direction of each point in radians (``atan2(I_row, I_col)``).
+    relative_motion : RigidMotion
+        ``(V_m - V_s, Omega_m - Omega_s)``: scene motion relative to camera m
+        minus that relative to camera s, per unit time.
+    delta_vn_std : array_like, optional
+        Standard deviation of ``delta_vn``; gives ``rho_std = std / |B|``.
+    min_cos : float
+        Smallest ``|cos|`` of the angle between the edge normal and the
+        translational flow direction accepted (0 accepts all ``B != 0``).
+
+    Returns
+    -------
+    InverseDepth
+    """
+    min_cos = check_nonnegative_finite("min_cos", min_cos)
+    if min_cos > 1:
+        msg = f"min_cos must be within [0, 1], got {min_cos!r}"
+        raise ValueError(msg)
+    dvn = np.asarray(delta_vn, dtype=float)
+    alpha = np.asarray(alpha, dtype=float)
+    a, b = relative_normal_flow_coefficients(camera, rows, cols, alpha, relative_motion)
+    x, y = camera.to_normalized(rows, cols)
+    vx, vy, vz = relative_motion.translation
+    flow_norm = camera.focal_px * np.hypot(vx - x * vz, vy - y * vz)
+    dvn, a, b, flow_norm = np.broadcast_arrays(dvn, a, b, flow_norm)
+    reason = np.full(dvn.shape, Reason.OK, dtype=np.uint8)
+    reason[~np.isfinite(dvn) | ~np.isfinite(alpha * np.ones(dvn.shape))] = Reason.NO_DATA
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = np.abs(b) / flow_norm
+        determinable = (flow_norm > 0) & (cos >= max(min_cos, 1e-12))
+        reason[(reason == Reason.OK) & ~determinable] = Reason.UNDETERMINABLE
+        rho = (dvn - a) / b
+    reason[(reason == Reason.OK) & ~(rho > 0)] = Reason.NOT_POSITIVE
+    ok = reason == Reason.OK
+    rho = np.where(ok, rho, np.nan)
+    if delta_vn_std is None:
+        rho_std = np.full(dvn.shape, np.nan)
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho_std = np.where(ok, np.asarray(delta_vn_std, dtype=float) / np.abs(b), np.nan)
+    return InverseDepth(rho, rho_std, reason, np.asarray(b, dtype=float))
+
+
+def _special_case(numerator, delta_vn):
+    dvn = np.asarray(delta_vn, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.asarray(numerator, dtype=float) / dvn
+    return np.where(z > 0, z, np.nan)
+
+
+def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
+    """Depth when the relative motion is a pure x translation (paper eq. 5, 6).
+
+    ``Z = f dVx cos(alpha) / dVn`` (``dVx`` in scene units per unit time,
+    ``dVn`` in px per unit time); NaN where ``Z`` would not be positive.
+    """
+    f = check_positive_finite("focal_px", focal_px)
+    if not np.isfinite(delta_vx) or delta_vx == 0:
+        msg = f"delta_vx must be a non-zero finite translation, got {delta_vx!r}"
+        raise ValueError(msg)
+    return _special_case(f * delta_vx * np.cos(alpha), delta_vn)
+
+
+def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
+    """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``."""
+    f = check_positive_finite("focal_px", focal_px)
+    if not np.isfinite(delta_vy) or delta_vy == 0:
+        msg = f"delta_vy must be a non-zero finite translation, got {delta_vy!r}"
+        raise ValueError(msg)
+    return _special_case(f * delta_vy * np.sin(alpha), delta_vn)
+
+
+def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float):
+    """Depth for a pure z translation: ``Z = -f dVz (x cos a + y sin a) / dVn``."""
+    if not np.isfinite(delta_vz) or delta_vz == 0:
+        msg = f"delta_vz must be a non-zero finite translation, got {delta_vz!r}"
+        raise ValueError(msg)
+    x, y = camera.to_normalized(rows, cols)
+    return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
+
+
+def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
+    """Weighted least-squares inverse depth from several measurements of a point.
+
+    Each measurement ``k`` obeys ``dVn_k = A_k + B_k rho`` with noise
+    ``std_k``. The estimate and its standard deviation are
+
+    .. math::
+        \\hat\\rho = \\frac{\\sum_k w_k B_k (\\Delta V_{n,k} - A_k)}{\\sum_k w_k B_k^2},
+        \\qquad \\sigma_\\rho = \\Big(\\sum_k w_k B_k^2\\Big)^{-1/2},
+        \\qquad w_k = \\sigma_k^{-2}.
+
+    NaN measurements are ignored. Returns ``(rho, rho_std, count)`` reduced
+    along ``axis``; NaN where no measurement has ``B != 0``.
+    """
+    dvn, a, b, std = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (delta_vn, a, b, delta_vn_std)))
+    usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (std > 0) & (b != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(usable, 1.0 / std**2, 0.0)
+        num = np.sum(np.where(usable, w * b * (dvn - a), 0.0), axis=axis)
+        den = np.sum(np.where(usable, w * b * b, 0.0), axis=axis)
+        rho = num / den
+        rho_std = 1.0 / np.sqrt(den)
+    count = np.sum(usable, axis=axis)
+    bad = den <= 0
+    rho = np.where(bad, np.nan, rho)
+    rho_std = np.where(bad, np.nan, rho_std)
+    return rho, rho_std, count

@@ -1,0 +1,312 @@
+"""Normal flow from image sequences (paper section 3.1).
+
+Two steps, as in the paper: Gaussian smoothing of every frame, then the
+intensity gradients ``I_col``, ``I_row`` and ``I_t`` from a 2 x 2 x 3 stencil
+(three frames; Horn and Schunck's 2 x 2 x 2 cube for two frames). Every
+estimate belongs to the **centre of a 2 x 2 pixel cell** -- position
+``(row + 0.5, col + 0.5)`` for cell ``[row, col]`` -- and to the time of the
+middle frame (the midpoint of the two frames for the two-frame stencil).
+Output arrays therefore have shape ``(H - 1, W - 1)``.
+
+Normal flow follows from brightness constancy ``I_col u + I_row v + I_t = 0``:
+
+.. math::
+    V_n = -I_t / |\\nabla I|,\\qquad \\alpha = \\operatorname{atan2}(I_{row}, I_{col})
+
+(paper eq. 3 with ``n = (cos alpha, sin alpha)``), in pixels per unit time.
+
+Stencils
+--------
+``"paper"``
+    The printed stencil with consistent normalisation: spatial differences
+    averaged over the 2 x 2 cell and the three frames with equal weights,
+    ``I_t`` the central difference averaged over the cell's four pixels. A
+    linear ramp in space and time gives the exact gradient. (The printed
+    ``1/8`` for six differences and the sign of the last ``I_z`` term are
+    misprints.)
+``"simpson"``
+    As ``"paper"`` but the three frames weighted 1:4:1 in the spatial
+    gradients. The central difference ``I(t+d) - I(t-d)`` is the integral of
+    the spatial derivative along the motion; Simpson's rule integrates it to
+    fourth order, which removes the ``d^2 / (6 sigma^2)`` bias that equal
+    weights leave when the motion per frame ``d`` is a sizeable fraction of
+    the smoothing scale ``sigma``.
+``"matched"`` (default)
+    As ``"simpson"`` with a four-point difference ``3/4 (I[j+1] - I[j]) +
+    1/12 (I[j+2] - I[j-1])`` along each derivative axis, so that the spatial
+    derivatives see the same two-pixel averaging as ``I_t`` to second order.
+    The two-point difference of the paper leaves a bias of about
+    ``-1/(12 sigma^2)`` in every normal flow (3.7 % at sigma = 1.5 px), which
+    the matched difference removes. Exact on linear ramps too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+
+__all__ = [
+    "STENCILS",
+    "GradientField",
+    "gaussian_smooth",
+    "gradients",
+    "normal_flow",
+    "estimate_noise_std",
+    "noise_gains",
+]
+
+STENCILS = ("matched", "simpson", "paper")
+
+_TEMPORAL_WEIGHTS = {
+    "paper": (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0),
+    "simpson": (1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0),
+    "matched": (1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0),
+}
+
+
+@dataclass(frozen=True)
+class GradientField:
+    """Intensity gradients at the centres of 2 x 2 pixel cells.
+
+    Attributes
+    ----------
+    grad_col, grad_row : ndarray, shape (H-1, W-1)
+        Spatial derivatives in intensity per pixel at cell centres.
+    grad_t : ndarray, shape (H-1, W-1)
+        Temporal derivative in intensity per unit time.
+    """
+
+    grad_col: np.ndarray
+    grad_row: np.ndarray
+    grad_t: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Shape of the cell grid, ``(H - 1, W - 1)``."""
+        return self.grad_col.shape
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """Gradient magnitude ``|grad I|`` (intensity per pixel)."""
+        return np.hypot(self.grad_col, self.grad_row)
+
+    @property
+    def alpha(self) -> np.ndarray:
+        """Normal direction ``alpha = atan2(I_row, I_col)`` in radians."""
+        return np.arctan2(self.grad_row, self.grad_col)
+
+    @property
+    def normal_flow(self) -> np.ndarray:
+        """Normal flow ``-I_t / |grad I|`` in px per unit time; NaN where ``grad I = 0``."""
+        mag = self.magnitude
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vn = -self.grad_t / mag
+        vn[mag == 0] = np.nan
+        return vn
+
+    def normal_flow_along(self, grad_col: np.ndarray, grad_row: np.ndarray) -> np.ndarray:
+        """Normal flow measured along a given (shared) gradient direction.
+
+        Two flows are only comparable along the same normal: the relative
+        normal flow of two cameras uses one spatial gradient for both.
+        """
+        mag = np.hypot(grad_col, grad_row)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vn = -self.grad_t / mag
+        vn[mag == 0] = np.nan
+        return vn
+
+    @staticmethod
+    def cell_centres(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel coordinates ``(rows, cols)`` of the cell centres, each shape ``shape``."""
+        rows = np.arange(shape[0], dtype=float)[:, None] + 0.5
+        cols = np.arange(shape[1], dtype=float)[None, :] + 0.5
+        return np.broadcast_to(rows, shape), np.broadcast_to(cols, shape)
+
+
+def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
+    """Gaussian smoothing (OpenCV, reflected border); ``sigma_px = 0`` copies.
+
+    The kernel is truncated at 4 sigma on each side.
+    """
+    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    if sigma_px == 0:
+        return np.array(image, copy=True)
+    radius = max(1, int(np.ceil(4.0 * sigma_px)))
+    ksize = 2 * radius + 1
+    return cv2.GaussianBlur(image, (ksize, ksize), sigmaX=sigma_px, sigmaY=sigma_px, borderType=cv2.BORDER_REFLECT)
+
+
+def _diff_col(image: np.ndarray, matched: bool) -> np.ndarray:
+    """Difference along columns at half-integer columns, shape (H, W-1)."""
+    two_point = image[:, 1:] - image[:, :-1]
+    if not matched:
+        return two_point
+    padded = np.pad(image, ((0, 0), (1, 1)), mode="edge")
+    wide = padded[:, 3:] - padded[:, :-3]
+    return 0.75 * two_point + (1.0 / 12.0) * wide
+
+
+def _cell_gradient(image: np.ndarray, matched: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``(I_col, I_row)`` of one frame at the 2 x 2 cell centres."""
+    dc = _diff_col(image, matched)
+    grad_col = 0.5 * (dc[:-1] + dc[1:])
+    dr = _diff_col(image.T, matched).T
+    grad_row = 0.5 * (dr[:, :-1] + dr[:, 1:])
+    return grad_col, grad_row
+
+
+def _cell_mean(image: np.ndarray) -> np.ndarray:
+    return 0.25 * (image[:-1, :-1] + image[:-1, 1:] + image[1:, :-1] + image[1:, 1:])
+
+
+def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "matched") -> GradientField:
+    """Gradients of 2 or 3 (already smoothed) frames at cell centres.
+
+    Parameters
+    ----------
+    smoothed_frames : sequence of 2 or 3 ndarray, shape (H, W)
+        Equally spaced frames in time order.
+    frame_interval : float
+        Time between consecutive frames (> 0); ``I_t`` is per unit time.
+    stencil : {"matched", "simpson", "paper"}
+        Three-frame stencil (module docstring). Two frames always use the
+        Horn-Schunck cube: both frames weighted equally, ``I_t`` at the
+        midpoint time.
+
+    Returns
+    -------
+    GradientField
+        Gradients at cell centres ``(row + 0.5, col + 0.5)``, shape (H-1, W-1).
+    """
+    if stencil not in STENCILS:
+        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
+        raise ValueError(msg)
+    dt = check_positive_finite("frame_interval", frame_interval)
+    n = len(smoothed_frames)
+    matched = stencil == "matched"
+    if n == 3:
+        weights = _TEMPORAL_WEIGHTS[stencil]
+        grad_col = np.zeros_like(smoothed_frames[0][:-1, :-1])
+        grad_row = np.zeros_like(grad_col)
+        for w, frame in zip(weights, smoothed_frames):
+            gc, gr = _cell_gradient(frame, matched)
+            grad_col += w * gc
+            grad_row += w * gr
+        grad_t = _cell_mean(smoothed_frames[2] - smoothed_frames[0]) / (2.0 * dt)
+    elif n == 2:
+        gc0, gr0 = _cell_gradient(smoothed_frames[0], matched)
+        gc1, gr1 = _cell_gradient(smoothed_frames[1], matched)
+        grad_col = 0.5 * (gc0 + gc1)
+        grad_row = 0.5 * (gr0 + gr1)
+        grad_t = _cell_mean(smoothed_frames[1] - smoothed_frames[0]) / dt
+    else:
+        msg = f"gradients need 2 or 3 frames, got {n}"
+        raise ValueError(msg)
+    return GradientField(grad_col, grad_row, grad_t)
+
+
+def normal_flow(
+    frames,
+    *,
+    sigma_px: float = 2.0,
+    frame_interval: float = 1.0,
+    stencil: str = "matched",
+    dtype=np.float32,
+) -> GradientField:
+    """Normal flow of a 2- or 3-frame sequence (paper section 3.1).
+
+    Parameters
+    ----------
+    frames : sequence of 2 or 3 ndarray, shape (H, W), or ndarray (N, H, W)
+        Grey frames, equally spaced in time, in time order.
+    sigma_px : float
+        Standard deviation of the Gaussian smoothing in pixels (0: none).
+        Larger values tolerate larger motion per frame (paper: "big values
+        should be used if the image motion is large").
+    frame_interval : float
+        Time between consecutive frames; the flow is per unit time.
+    stencil : {"matched", "simpson", "paper"}
+        Gradient stencil; see the module docstring.
+    dtype : float32 or float64
+        Working precision.
+
+    Returns
+    -------
+    GradientField
+        ``.normal_flow``, ``.alpha``, ``.magnitude`` at cell centres
+        ``(row + 0.5, col + 0.5)`` of the middle frame, shape (H-1, W-1).
+
+    Examples
+    --------
+    A ramp ``I = 2 col + 3 row - 5 t`` moving with any flow gives exact gradients:
+
+    >>> import numpy as np
+    >>> r, c = np.mgrid[0:8, 0:8]
+    >>> frames = [2.0 * c + 3.0 * r - 5.0 * t for t in (-1, 0, 1)]
+    >>> g = normal_flow(frames, sigma_px=0, dtype=np.float64)
+    >>> float(g.grad_col[3, 3]), float(g.grad_row[3, 3]), float(g.grad_t[3, 3])
+    (2.0, 3.0, -5.0)
+    """
+    dt = float_dtype(dtype)
+    frames = as_frames("frames", frames, dtype=dt)
+    if len(frames) not in (2, 3):
+        msg = f"frames must hold 2 or 3 frames, got {len(frames)}"
+        raise ValueError(msg)
+    smoothed = [gaussian_smooth(f, sigma_px=sigma_px) for f in frames]
+    return gradients(smoothed, frame_interval=frame_interval, stencil=stencil)
+
+
+def estimate_noise_std(image: np.ndarray) -> float:
+    """Robust estimate of white image-noise standard deviation (grey levels).
+
+    Immerkaer's 3 x 3 operator (the difference of two Laplacians) cancels
+    smooth image content; the median absolute response, scaled for a normal
+    distribution, ignores the edges that inflate the plain mean. Returns 0
+    for noise-free piecewise-constant images.
+    """
+    img = np.asarray(image, dtype=np.float64)
+    if img.ndim != 2 or min(img.shape) < 3:
+        msg = f"image must be 2-D and at least 3x3, got shape {img.shape}"
+        raise ValueError(msg)
+    kernel = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
+    response = cv2.filter2D(img, cv2.CV_64F, kernel, borderType=cv2.BORDER_REFLECT)[1:-1, 1:-1]
+    # std of the response to white noise of std s is s * sqrt(sum(kernel**2)) = 6 s
+    return float(1.482602218505602 * np.median(np.abs(response)) / 6.0)
+
+
+def _gaussian_kernel_1d(sigma_px: float) -> np.ndarray:
+    if sigma_px == 0:
+        return np.array([1.0])
+    radius = max(1, int(np.ceil(4.0 * sigma_px)))
+    return cv2.getGaussianKernel(2 * radius + 1, sigma_px, cv2.CV_64F).ravel()
+
+
+def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3) -> tuple[float, float]:
+    """Noise gains of the stencil for white image noise of unit variance.
+
+    Returns ``(temporal, spatial)``: the standard deviation of ``I_t * dt``
+    (``dt`` = frame interval) and of each spatial derivative, per unit
+    standard deviation of independent white noise in every frame. Computed
+    exactly from the effective linear filters (Gaussian, then the stencil).
+    """
+    if stencil not in STENCILS:
+        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
+        raise ValueError(msg)
+    g = _gaussian_kernel_1d(check_nonnegative_finite("sigma_px", sigma_px))
+    g2 = np.outer(g, g)
+    pad = np.pad(g2, 3)
+    cell = 0.25 * (pad[:-1, :-1] + pad[:-1, 1:] + pad[1:, :-1] + pad[1:, 1:])
+    if n_frames == 3:
+        temporal = np.sqrt(2.0 * np.sum(cell**2)) / 2.0
+        weights = np.asarray(_TEMPORAL_WEIGHTS[stencil])
+    else:
+        temporal = np.sqrt(2.0 * np.sum(cell**2))
+        weights = np.array([0.5, 0.5])
+    gc, _ = _cell_gradient(pad, stencil == "matched")
+    spatial = np.sqrt(np.sum(gc**2) * np.sum(weights**2))
+    return float(temporal), float(spatial)

@@ -1,0 +1,365 @@
+"""Dynamic and static stereo from relative normal flow (paper sections 2.3, 3.2, 3.3).
+
+*Dynamic stereo* (paper Fig. 3): five images ``I1 ... I5`` taken at equal
+time steps; ``I1, I3, I5`` come from the moving camera, ``I2, I3, I4`` from
+the stationary one, and both cameras take ``I3`` at the same instant and
+place. Each triple gives a normal-flow field registered on ``I3``; the moving
+camera's triple spans twice the time, so each temporal derivative is divided
+by its own time step before the flows are subtracted.
+
+*Static stereo* (paper section 2.3): views taken at positions spaced by
+``baseline`` along a known direction are a sequence with unit time step, seen
+by a camera whose partner is still; the relative normal flow is the
+sequence's own normal flow and the relative motion is ``-baseline`` along
+the direction of travel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+from .camera import PinholeCamera, RigidMotion
+from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
+from .edges import EdgeSelection, select_edge_points
+from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
+
+__all__ = ["EdgeDepth", "dynamic_stereo", "static_stereo_edges"]
+
+
+@dataclass(frozen=True)
+class EdgeDepth:
+    """Depth at the strong zero-crossing edge points of the reference image.
+
+    Per-point arrays have shape ``(N,)`` and cover every strong,
+    non-corner edge point; ``valid`` tells which have a depth. Positions are
+    cell centres in pixel coordinates of the reference (middle) image.
+
+    Attributes
+    ----------
+    rows, cols : ndarray
+        Pixel position of each point (``row + 0.5``, ``col + 0.5`` of its cell).
+    alpha : ndarray
+        Normal direction (radians) used by the depth solver.
+    gradient : ndarray
+        Gradient magnitude (intensity per pixel).
+    delta_vn : ndarray
+        Relative normal flow in px per unit time.
+    delta_vn_std : ndarray
+        Its standard deviation from image noise.
+    inverse_depth : InverseDepth
+        ``rho``, ``rho_std``, reason codes.
+    camera : PinholeCamera
+    relative_motion : RigidMotion
+    selection : EdgeSelection
+        The full-grid edge rules (for figures).
+    flows : dict of str to ndarray
+        Full cell-grid normal-flow fields, e.g. ``"moving"``,
+        ``"stationary"``, ``"relative"`` (px per unit time).
+    """
+
+    rows: np.ndarray
+    cols: np.ndarray
+    alpha: np.ndarray
+    gradient: np.ndarray
+    delta_vn: np.ndarray
+    delta_vn_std: np.ndarray
+    inverse_depth: InverseDepth
+    camera: PinholeCamera
+    relative_motion: RigidMotion
+    selection: EdgeSelection
+    flows: dict = field(default_factory=dict)
+    noise_std: float = 0.0
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Points that have a depth."""
+        return self.inverse_depth.valid
+
+    @property
+    def reason(self) -> np.ndarray:
+        """:class:`nfdepth.depth.Reason` code of each point."""
+        return self.inverse_depth.reason
+
+    @property
+    def depth(self) -> np.ndarray:
+        """Depth Z of each point (NaN where undeterminable)."""
+        return self.inverse_depth.depth
+
+    @property
+    def depth_std(self) -> np.ndarray:
+        """First-order standard deviation of Z."""
+        return self.inverse_depth.depth_std
+
+    @property
+    def points(self) -> np.ndarray:
+        """3-D points ``(X, Y, Z)`` in the reference camera frame, shape (N, 3)."""
+        return self.camera.back_project(self.rows, self.cols, self.depth)
+
+    def __len__(self) -> int:
+        return int(self.rows.size)
+
+
+def _noise_level(noise_std, frames) -> float:
+    if noise_std is None:
+        return float(np.median([estimate_noise_std(f) for f in frames]))
+    return check_nonnegative_finite("noise_std", noise_std)
+
+
+def _vn_std(field: GradientField, vn: np.ndarray, noise: float, *, sigma_px: float, stencil: str, dt: float):
+    """Standard deviation of one normal-flow estimate from white image noise."""
+    temporal, spatial = noise_gains(sigma_px=sigma_px, stencil=stencil)
+    mag = field.magnitude
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return noise * np.sqrt((temporal / dt) ** 2 + (vn * spatial) ** 2) / mag
+
+
+def _edge_result(
+    *,
+    camera,
+    relative_motion,
+    shared: GradientField,
+    smoothed_middle,
+    delta_vn,
+    delta_vn_std,
+    flows,
+    noise,
+    edge_options,
+    min_cos,
+):
+    selection = select_edge_points(shared, smoothed_middle, **edge_options)
+    rows_grid, cols_grid = GradientField.cell_centres(shared.shape)
+    m = selection.mask
+    rows, cols = rows_grid[m], cols_grid[m]
+    alpha = shared.alpha[m]
+    inv = solve_inverse_depth(
+        delta_vn[m],
+        camera=camera,
+        rows=rows,
+        cols=cols,
+        alpha=alpha,
+        relative_motion=relative_motion,
+        delta_vn_std=delta_vn_std[m],
+        min_cos=min_cos,
+    )
+    return EdgeDepth(
+        rows=rows,
+        cols=cols,
+        alpha=alpha,
+        gradient=shared.magnitude[m],
+        delta_vn=delta_vn[m],
+        delta_vn_std=delta_vn_std[m],
+        inverse_depth=inv,
+        camera=camera,
+        relative_motion=relative_motion,
+        selection=selection,
+        flows=flows,
+        noise_std=noise,
+    )
+
+
+def _check_camera(camera, shape):
+    if not isinstance(camera, PinholeCamera):
+        msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
+        raise TypeError(msg)
+    if camera.shape != shape:
+        msg = f"camera image size {camera.shape} (rows, cols) does not match the frames' shape {shape}"
+        raise ValueError(msg)
+
+
+def dynamic_stereo(
+    frames,
+    *,
+    camera: PinholeCamera,
+    relative_motion: RigidMotion,
+    frame_interval: float = 1.0,
+    sigma_px: float = 2.5,
+    stencil: str = "matched",
+    min_gradient: float | None = None,
+    max_corner_ratio: float = 0.1,
+    corner_window_px: float | None = None,
+    min_cos: float = 0.25,
+    noise_std: float | None = None,
+    dtype=np.float32,
+) -> EdgeDepth:
+    """Depth from the five-image dynamic stereo sequence (paper Fig. 3, eq. 4).
+
+    Parameters
+    ----------
+    frames : sequence of 5 ndarray, shape (H, W)
+        ``I1 ... I5`` at equal time steps: ``I1, I3, I5`` from the moving
+        camera, ``I2, I3, I4`` from the stationary one (``I3`` shared).
+    camera : PinholeCamera
+        Intrinsics shared by both cameras (their image planes coincide at I3).
+    relative_motion : RigidMotion
+        ``(V_m - V_s, Omega_m - Omega_s)``: the scene's motion relative to
+        the moving camera minus that relative to the stationary one, per unit
+        time. A moving camera translating by ``T`` gives ``V = -T``.
+    frame_interval : float
+        Time between consecutive images ``I_k`` and ``I_k+1``.
+    sigma_px : float
+        Gaussian smoothing (px).
+    stencil : {"matched", "simpson", "paper"}
+        Gradient stencil (:mod:`nfdepth.normal_flow`).
+    min_gradient, max_corner_ratio, corner_window_px
+        Edge-point rules (:func:`nfdepth.edges.select_edge_points`);
+        ``corner_window_px`` defaults to ``sigma_px``.
+    min_cos : float
+        Determinability threshold (:func:`nfdepth.depth.solve_inverse_depth`).
+    noise_std : float, optional
+        Image noise (grey levels); estimated from the frames when omitted.
+
+    Returns
+    -------
+    EdgeDepth
+        ``flows`` holds ``"moving"``, ``"stationary"`` and ``"relative"``.
+    """
+    dt = float_dtype(dtype)
+    frames = as_frames("frames", frames, 5, dtype=dt)
+    _check_camera(camera, frames[0].shape)
+    if not isinstance(relative_motion, RigidMotion):
+        msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
+        raise TypeError(msg)
+    step = check_positive_finite("frame_interval", frame_interval)
+    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    noise = _noise_level(noise_std, frames)
+    s = [gaussian_smooth(f, sigma_px=sigma_px) for f in frames]
+    moving = gradients([s[0], s[2], s[4]], frame_interval=2.0 * step, stencil=stencil)
+    stationary = gradients([s[1], s[2], s[3]], frame_interval=step, stencil=stencil)
+    vn_m = moving.normal_flow
+    vn_s = stationary.normal_flow
+    delta = vn_m - vn_s
+    std = np.hypot(
+        _vn_std(moving, vn_m, noise, sigma_px=sigma_px, stencil=stencil, dt=2.0 * step),
+        _vn_std(stationary, vn_s, noise, sigma_px=sigma_px, stencil=stencil, dt=step),
+    )
+    shared = GradientField(
+        0.5 * (moving.grad_col + stationary.grad_col),
+        0.5 * (moving.grad_row + stationary.grad_row),
+        moving.grad_t - stationary.grad_t,
+    )
+    edge_options = {
+        "min_gradient": min_gradient,
+        "max_corner_ratio": max_corner_ratio,
+        "corner_window_px": corner_window_px if corner_window_px is not None else max(sigma_px, 1.0),
+    }
+    return _edge_result(
+        camera=camera,
+        relative_motion=relative_motion,
+        shared=shared,
+        smoothed_middle=s[2],
+        delta_vn=delta,
+        delta_vn_std=std,
+        flows={"moving": vn_m, "stationary": vn_s, "relative": delta},
+        noise=noise,
+        edge_options=edge_options,
+        min_cos=min_cos,
+    )
+
+
+def static_stereo_edges(
+    views,
+    *,
+    camera: PinholeCamera,
+    baseline: float,
+    direction=(1.0, 0.0, 0.0),
+    reference: int | None = None,
+    sigma_px: float = 2.0,
+    stencil: str = "matched",
+    min_gradient: float | None = None,
+    max_corner_ratio: float = 0.1,
+    corner_window_px: float | None = None,
+    min_cos: float = 0.25,
+    noise_std: float | None = None,
+    max_span: int | None = None,
+    dtype=np.float32,
+) -> EdgeDepth:
+    """Depth at edge points from equally spaced static views (paper section 2.3).
+
+    Parameters
+    ----------
+    views : sequence of >= 3 ndarray, shape (H, W)
+        Views taken at positions ``P_k = P_0 + k * baseline * direction``
+        (camera moving toward ``direction`` from first to last), same
+        orientation.
+    camera : PinholeCamera
+        Intrinsics (shared).
+    baseline : float
+        Distance between neighbouring views (scene units, > 0).
+    direction : 3 floats
+        Direction of travel in the camera frame (normalised here);
+        ``(1, 0, 0)`` for a horizontal row, ``(0, 1, 0)`` for a vertical one.
+    reference : int, optional
+        Index of the view that gets depth; default the middle view. It needs
+        a neighbour on each side.
+    max_span : int, optional
+        Use the symmetric triples ``(ref - k, ref, ref + k)`` for
+        ``k = 1 .. max_span`` (default: all that fit) and fuse their inverse
+        depths by weighted least squares (:func:`nfdepth.depth.fuse_inverse_depth`).
+
+    Returns
+    -------
+    EdgeDepth
+        With ``flows["relative"]`` the normal flow of the ``k = 1`` triple.
+    """
+    dt = float_dtype(dtype)
+    views = as_frames("views", views, min_count=3, dtype=dt)
+    _check_camera(camera, views[0].shape)
+    baseline = check_positive_finite("baseline", baseline)
+    direction = np.asarray(direction, dtype=float)
+    if direction.shape != (3,) or not np.all(np.isfinite(direction)) or not np.any(direction):
+        msg = f"direction must be 3 finite numbers, not all zero, got {direction.tolist()}"
+        raise ValueError(msg)
+    direction = direction / np.linalg.norm(direction)
+    n = len(views)
+    ref = n // 2 if reference is None else int(reference)
+    if not 1 <= ref <= n - 2:
+        msg = f"reference must index a view with a neighbour on each side (1..{n - 2}), got {reference!r}"
+        raise ValueError(msg)
+    span = min(ref, n - 1 - ref)
+    if max_span is not None:
+        if int(max_span) < 1:
+            msg = f"max_span must be >= 1, got {max_span!r}"
+            raise ValueError(msg)
+        span = min(span, int(max_span))
+    noise = _noise_level(noise_std, views)
+    s = [gaussian_smooth(v, sigma_px=sigma_px) for v in views]
+    relative_motion = RigidMotion(translation=-baseline * direction)
+    fields = [gradients([s[ref - k], s[ref], s[ref + k]], frame_interval=float(k), stencil=stencil) for k in range(1, span + 1)]
+    flows = [f.normal_flow for f in fields]
+    stds = [_vn_std(f, vn, noise, sigma_px=sigma_px, stencil=stencil, dt=float(k)) for k, (f, vn) in enumerate(zip(fields, flows), 1)]
+    first = fields[0]
+    shared = GradientField(
+        np.mean([f.grad_col for f in fields], axis=0), np.mean([f.grad_row for f in fields], axis=0), first.grad_t
+    )
+    if span == 1:
+        delta, std = flows[0], stds[0]
+    else:
+        # All triples measure the same flow per unit step; combine them with
+        # inverse-variance weights (B is common, so this is the WLS of eq. 4).
+        ones = np.ones_like(flows[0])
+        fused, fused_std, _ = fuse_inverse_depth(np.stack(flows), 0.0, ones, np.stack(stds) if noise > 0 else ones)
+        delta = fused
+        std = fused_std * (noise > 0) if noise > 0 else np.full_like(fused, 0.0)
+    edge_options = {
+        "min_gradient": min_gradient,
+        "max_corner_ratio": max_corner_ratio,
+        "corner_window_px": corner_window_px if corner_window_px is not None else max(sigma_px, 1.0),
+    }
+    return _edge_result(
+        camera=camera,
+        relative_motion=relative_motion,
+        shared=shared,
+        smoothed_middle=s[ref],
+        delta_vn=delta,
+        delta_vn_std=std,
+        flows={"relative": flows[0]},
+        noise=noise,
+        edge_options=edge_options,
+        min_cos=min_cos,
+    )
+
+
+__all__ += ["Reason"]

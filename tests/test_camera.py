@@ -1,0 +1,118 @@
+"""Camera and motion model (paper eq. 1, 3, 4) against hand-derived values."""
+
+import numpy as np
+import pytest
+
+from nfdepth.camera import (
+    PinholeCamera,
+    RigidMotion,
+    image_flow,
+    image_flow_px,
+    normal_flow_px,
+    relative_normal_flow_coefficients,
+)
+
+
+@pytest.fixture
+def camera():
+    return PinholeCamera(focal_px=100.0, width_px=200, height_px=160)
+
+
+def test_default_principal_point_is_image_centre(camera):
+    assert camera.cx_px == pytest.approx(99.5)
+    assert camera.cy_px == pytest.approx(79.5)
+    assert camera.shape == (160, 200)
+
+
+def test_project_back_project_round_trip(camera):
+    rng = np.random.default_rng(0)
+    pts = rng.uniform([-100, -80, 50], [100, 80, 500], size=(50, 3))
+    rows, cols, z = camera.project(pts)
+    back = camera.back_project(rows, cols, z)
+    np.testing.assert_allclose(back, pts, rtol=1e-12, atol=1e-9)  # float64 round trip
+
+
+def test_pure_translation_flow_matches_eq1_by_hand():
+    # x=0.1, y=-0.2, Z=4, V=(1,2,3): u = (1 - 0.1*3)/4, v = (2 + 0.2*3)/4
+    u, v = image_flow(0.1, -0.2, 0.25, RigidMotion(translation=(1, 2, 3)))
+    assert u == pytest.approx(0.7 / 4)
+    assert v == pytest.approx(2.6 / 4)
+
+
+def test_rotation_flow_does_not_depend_on_depth():
+    motion = RigidMotion(rotation=(0.01, -0.02, 0.03))
+    x, y = np.meshgrid(np.linspace(-0.5, 0.5, 7), np.linspace(-0.4, 0.4, 5))
+    u1, v1 = image_flow(x, y, 1 / 10.0, motion)
+    u2, v2 = image_flow(x, y, 1 / 1000.0, motion)
+    np.testing.assert_array_equal(u1, u2)
+    np.testing.assert_array_equal(v1, v2)
+
+
+def test_scaling_depth_and_translation_leaves_flow_unchanged():
+    x, y = 0.3, -0.1
+    m1 = RigidMotion(translation=(1.0, -0.5, 0.7), rotation=(0.01, 0.02, 0.0))
+    m2 = RigidMotion(translation=(3.0, -1.5, 2.1), rotation=(0.01, 0.02, 0.0))
+    np.testing.assert_allclose(image_flow(x, y, 1 / 5.0, m1), image_flow(x, y, 1 / 15.0, m2), rtol=1e-14)
+
+
+def test_flow_matches_finite_difference_of_moving_point(camera):
+    # dP/dt = V + Omega x P; project before and after a small step.
+    motion = RigidMotion(translation=(0.5, -1.0, 1.5), rotation=(0.004, -0.003, 0.006))
+    p = np.array([30.0, -20.0, 300.0])
+    h = 1e-4
+    def proj(q):
+        r, c, _ = camera.project(q)
+        return np.array([c, r])
+    vel = motion.translation + np.cross(motion.rotation, p)
+    fd = (proj(p + h * vel) - proj(p - h * vel)) / (2 * h)
+    row, col, z = camera.project(p)
+    fu, fv = image_flow_px(camera, row, col, z, motion)
+    np.testing.assert_allclose([fu, fv], fd, rtol=1e-6)  # central difference error O(h^2)
+
+
+def test_about_center_equals_translation_minus_cross():
+    m = RigidMotion.about_center(rotation=(0, 0, 0.1), center=(0, 0, 400), translation=(1, 0, 0))
+    np.testing.assert_allclose(m.translation, [1, 0, 0])  # z axis through (0,0,400): omega x c = 0
+    m = RigidMotion.about_center(rotation=(0.1, 0, 0), center=(0, 0, 400))
+    np.testing.assert_allclose(m.translation, -np.cross([0.1, 0, 0], [0, 0, 400]))
+
+
+def test_relative_motion_and_camera_translation_sign():
+    moving = RigidMotion.camera_translation((2.0, 0, 0))
+    np.testing.assert_array_equal(moving.translation, [-2.0, 0, 0])
+    rel = moving - RigidMotion()
+    np.testing.assert_array_equal(rel.translation, [-2.0, 0, 0])
+
+
+def test_coefficients_reproduce_normal_flow(camera):
+    rng = np.random.default_rng(1)
+    rows = rng.uniform(0, 159, 40)
+    cols = rng.uniform(0, 199, 40)
+    z = rng.uniform(100, 900, 40)
+    alpha = rng.uniform(-np.pi, np.pi, 40)
+    motion = RigidMotion(translation=(-2, 0.3, 0.4), rotation=(0.001, 0.002, -0.003))
+    a, b = relative_normal_flow_coefficients(camera, rows, cols, alpha, motion)
+    vn = normal_flow_px(camera, rows, cols, z, alpha, motion)
+    np.testing.assert_allclose(a + b / z, vn, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"focal_px": 0, "width_px": 10, "height_px": 10}, "focal_px must be a positive"),
+        ({"focal_px": -5, "width_px": 10, "height_px": 10}, "focal_px must be a positive"),
+        ({"focal_px": float("nan"), "width_px": 10, "height_px": 10}, "focal_px must be a positive"),
+        ({"focal_px": 100, "width_px": 0, "height_px": 10}, "width_px must be a positive integer"),
+        ({"focal_px": 100, "width_px": 10, "height_px": 10, "cx_px": float("inf")}, "cx_px must be finite"),
+    ],
+)
+def test_bad_camera(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        PinholeCamera(**kwargs)
+
+
+def test_bad_motion():
+    with pytest.raises(ValueError, match=r"translation must have shape \(3,\)"):
+        RigidMotion(translation=(1, 2))
+    with pytest.raises(ValueError, match="rotation must be finite"):
+        RigidMotion(rotation=(0, np.nan, 0))

@@ -1,0 +1,117 @@
+"""Depth solvers (paper eq. 4-6) round-trip analytic relative normal flow."""
+
+import numpy as np
+import pytest
+
+from nfdepth.camera import PinholeCamera, RigidMotion, normal_flow_px
+from nfdepth.depth import (
+    Reason,
+    depth_x_translation,
+    depth_y_translation,
+    depth_z_translation,
+    fuse_inverse_depth,
+    solve_inverse_depth,
+)
+
+CAM = PinholeCamera(focal_px=120.0, width_px=160, height_px=120)
+
+
+def random_points(rng, n=500):
+    rows = rng.uniform(0, 119, n)
+    cols = rng.uniform(0, 159, n)
+    z = rng.uniform(50, 1000, n)
+    alpha = rng.uniform(-np.pi, np.pi, n)
+    return rows, cols, z, alpha
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_general_motion_round_trip_machine_precision(seed):
+    rng = np.random.default_rng(seed)
+    rows, cols, z, alpha = random_points(rng)
+    m_moving = RigidMotion(translation=rng.normal(0, 2, 3), rotation=rng.normal(0, 0.01, 3))
+    m_static = RigidMotion(translation=rng.normal(0, 1, 3), rotation=rng.normal(0, 0.01, 3))
+    rel = m_moving - m_static
+    dvn = normal_flow_px(CAM, rows, cols, z, alpha, m_moving) - normal_flow_px(CAM, rows, cols, z, alpha, m_static)
+    inv = solve_inverse_depth(dvn, camera=CAM, rows=rows, cols=cols, alpha=alpha, relative_motion=rel, min_cos=0.05)
+    ok = inv.valid
+    assert ok.mean() > 0.85  # only near-parallel edges (|cos| < 0.05) are refused
+    np.testing.assert_allclose(inv.depth[ok], z[ok], rtol=1e-9)  # float64 with B >= 0.05 |flow|
+    assert np.all(inv.reason[~ok] == Reason.UNDETERMINABLE)
+    assert np.all(np.isnan(inv.depth[~ok]))
+
+
+def test_special_cases_agree_with_general_solver():
+    rng = np.random.default_rng(7)
+    rows, cols, z, alpha = random_points(rng, 200)
+    for axis, fn in enumerate((depth_x_translation, depth_y_translation)):
+        t = np.zeros(3)
+        t[axis] = -2.0
+        rel = RigidMotion(translation=t)
+        dvn = normal_flow_px(CAM, rows, cols, z, alpha, rel)
+        kw = {"delta_vx": -2.0} if axis == 0 else {"delta_vy": -2.0}
+        zs = fn(dvn, alpha, focal_px=CAM.focal_px, **kw)
+        ok = np.isfinite(zs)
+        np.testing.assert_allclose(zs[ok], z[ok], rtol=1e-9)
+        assert ok.mean() > 0.95
+    rel = RigidMotion(translation=(0, 0, 1.5))
+    dvn = normal_flow_px(CAM, rows, cols, z, alpha, rel)
+    zs = depth_z_translation(dvn, alpha, camera=CAM, rows=rows, cols=cols, delta_vz=1.5)
+    ok = np.isfinite(zs)
+    np.testing.assert_allclose(zs[ok], z[ok], rtol=1e-8)
+
+
+def test_paper_eq6_by_hand():
+    # f = 100, dVx = -2, alpha = 0, Z = 400 -> dVn = -0.5 px per unit time
+    assert depth_x_translation(-0.5, 0.0, focal_px=100, delta_vx=-2.0) == pytest.approx(400.0)
+
+
+def test_pure_rotation_is_undeterminable_not_a_number():
+    rel = RigidMotion(rotation=(0.0, 0.0, 0.01))
+    inv = solve_inverse_depth([0.3, -0.2], camera=CAM, rows=[10, 50], cols=[20, 80], alpha=[0.1, 1.0], relative_motion=rel)
+    assert np.all(inv.reason == Reason.UNDETERMINABLE)
+    assert np.all(np.isnan(inv.rho))
+
+
+def test_edge_parallel_to_baseline_and_wrong_sign():
+    rel = RigidMotion(translation=(-2.0, 0, 0))
+    inv = solve_inverse_depth(
+        [-0.5, 0.5, -0.5], camera=CAM, rows=[60, 60, 60], cols=[80, 80, 80], alpha=[np.pi / 2, 0.0, 0.0], relative_motion=rel
+    )
+    assert inv.reason.tolist() == [Reason.UNDETERMINABLE, Reason.NOT_POSITIVE, Reason.OK]
+    assert inv.depth[2] == pytest.approx(120 * 2 / 0.5)  # f = 120 px
+
+
+def test_uncertainty_is_noise_over_b():
+    rel = RigidMotion(translation=(-2.0, 0, 0))
+    inv = solve_inverse_depth(
+        [-0.5], camera=CAM, rows=[59.5], cols=[79.5], alpha=[0.0], relative_motion=rel, delta_vn_std=[0.01]
+    )
+    assert inv.rho_std[0] == pytest.approx(0.01 / (120 * 2))
+
+
+def test_fusion_is_weighted_least_squares():
+    rho_true = 1 / 250.0
+    b = np.array([[-240.0], [120.0], [-60.0]])
+    a = np.array([[0.1], [-0.2], [0.0]])
+    std = np.array([[0.01], [0.02], [0.04]])
+    noise = np.array([[0.01], [-0.02], [0.04]])
+    dvn = a + b * rho_true + noise
+    rho, rho_std, count = fuse_inverse_depth(dvn, a, b, std)
+    w = 1 / std**2
+    expected = np.sum(w * b * (dvn - a)) / np.sum(w * b * b)
+    assert rho[0] == pytest.approx(expected)
+    assert rho_std[0] == pytest.approx(1 / np.sqrt(np.sum(w * b * b)))
+    assert count[0] == 3
+    # NaN measurements are skipped
+    dvn[1, 0] = np.nan
+    _, _, count = fuse_inverse_depth(dvn, a, b, std)
+    assert count[0] == 2
+
+
+def test_bad_special_case_input():
+    with pytest.raises(ValueError, match="delta_vx must be a non-zero finite translation"):
+        depth_x_translation(0.5, 0.0, focal_px=100, delta_vx=0.0)
+    with pytest.raises(ValueError, match="focal_px must be a positive"):
+        depth_x_translation(0.5, 0.0, focal_px=-1, delta_vx=1.0)
+    with pytest.raises(ValueError, match="min_cos must be within"):
+        solve_inverse_depth([1.0], camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=RigidMotion((1, 0, 0)), min_cos=2)
