@@ -1,0 +1,632 @@
+"""Dense, coarse-to-fine, multi-view static stereo from relative normal flow.
+
+The paper's static-stereo method (section 2.3, eq. 6) measures the normal
+flow of three closely spaced views with a three-frame gradient stencil
+(section 3.1). Being differential, it only holds for motions of a fraction
+of the smoothing scale per frame (sub-pixel to about 2 px). Real multi-view
+rows move 3-30 px between neighbours. This module wraps the same
+measurement in a coarse-to-fine warping scheme:
+
+1. A Gaussian pyramid (``cv2.pyrDown``) of every view; the coarsest level
+   starts at disparity ``d = 0``.
+2. At every level the views are warped toward the reference with the current
+   disparity, ``W_k(r, c) = V_k(r, c - t_k d(r, c))`` with ``t_k = p_k -
+   p_ref``. If ``d`` were right the warped views would be constant along the
+   sequence; the residual disparity ``delta`` is the (negative) normal flow of
+   the warped sequence along the baseline. With the camera moving toward +X
+   the flow is ``u = -delta`` per unit position, so paper eq. 6 reads, in
+   disparity form (``d = f b / Z``, :doc:`CONVENTIONS`)::
+
+       delta = -Vn / cos(alpha) = I_t / I_col .
+
+   With more than two views the temporal derivative ``I_t`` is the
+   least-squares slope of the warped intensities against position,
+   ``I_t = sum_k (t_k - tbar) (W_k - Wbar) / sum_k (t_k - tbar)^2``, i.e. the
+   weighted least-squares fusion of every view's relative normal flow with
+   the correct (shared-reference) noise correlation. For a symmetric triple
+   ``(ref - k, ref, ref + k)`` this *is* the paper's stencil ``I_t =
+   (W_+ - W_-) / 2k`` (section 3.1); for unequally spaced or one-sided views
+   it generalises it. The per-cell estimates come from
+   :func:`nfdepth.normal_flow.gradients` (matched stencil) on pairs
+   ``(W_ref, W_k)``.
+3. The point-wise ``delta`` is densified by normalised convolution with a
+   Gaussian window (``dense_window_px``) and weights ``I_col^2 S_tt`` (the WLS
+   information of eq. 6 with ``B = I_col``), which is one-dimensional
+   Lucas-Kanade along the baseline. Steps are clamped to +-1 px per
+   iteration; a 5 x 5 median removes outliers after each level; the field is
+   upsampled (``cv2.resize``, values x 2) to the next level.
+4. At the finest level the strong zero-crossing, non-corner edge points
+   (:func:`nfdepth.edges.select_edge_points`, the paper's sparse output) are
+   refined with their *own* point-wise estimate (paper eq. 6 per point):
+   each one is re-warped with a locally constant disparity and updated by its
+   own ``delta``, so that points on depth discontinuities converge to their
+   own motion rather than to the window's blend of foreground and
+   background.
+
+Pixel grid
+----------
+The stencils of :mod:`nfdepth.normal_flow` give estimates at the centres of
+2 x 2 pixel cells. Here the warp samples every view on the *half-shifted*
+node grid ``(r - 1/2, c - 1/2)``, ``r = 0..H``, ``c = 0..W`` (``H+1`` by
+``W+1`` nodes), so the cell centres fall exactly on the pixel centres
+``(r, c)`` of the reference: every output is pixel-centred and needs no
+resampling. (For the reference itself the half shift is a 2 x 2 box filter,
+applied identically to every view.)
+
+Uncertainty
+-----------
+Per cell, ``var(delta) = s_c^2 / (I_col^2 S_tt)`` with ``s_c`` the noise of
+one smoothed, cell-averaged frame (from the image noise std, estimated with
+:func:`nfdepth.normal_flow.estimate_noise_std` when not given) and ``S_tt =
+sum (t_k - tbar)^2``. With three or more views the least-squares residuals
+measure the model error: the variance is scaled by the local reduced chi^2
+when it exceeds 1. Dense pixels get the normalised-convolution variance,
+corrected for the spatial correlation of the smoothed noise.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+from .depth import Reason
+from .edges import select_edge_points
+from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients
+
+__all__ = ["StereoResult", "static_stereo", "auto_levels"]
+
+_PYRDOWN_NOISE = 70.0 / 256.0  # std gain of cv2.pyrDown on white noise: (sum k_i^2) with k = [1 4 6 4 1]/16, squared, sqrt
+
+
+@dataclass(frozen=True)
+class StereoResult:
+    """Disparity of the reference view, dense and at edge points.
+
+    Attributes
+    ----------
+    disparity : ndarray, float32, shape (H, W)
+        Disparity in px per unit of position (per neighbour step for equally
+        spaced views): pixel ``(r, c)`` of the reference is seen at
+        ``(r, c - (p_k - p_ref) d)`` in view ``k`` (axis "x"). NaN where
+        unknown. Values in ``(-0.5, 0]`` are kept as measured (noise about a
+        far point), not clamped.
+    uncertainty : ndarray, float32, shape (H, W)
+        Standard deviation of ``disparity`` (px per unit position), NaN where
+        unknown.
+    edge_mask : ndarray of bool, shape (H, W)
+        Strong zero-crossing, non-corner edge points at the finest level (the
+        paper's sparse output), pixel-centred.
+    reason : ndarray of uint8, shape (H, W)
+        :class:`nfdepth.depth.Reason` codes, 0 where ``disparity`` is valid.
+    levels : int
+        Pyramid levels used (1 = the paper's single-level method).
+    runtime_s : float
+        Wall-clock time of the estimate.
+    noise_std : float
+        Image noise std used (grey levels of the input).
+    """
+
+    disparity: np.ndarray
+    uncertainty: np.ndarray
+    edge_mask: np.ndarray
+    reason: np.ndarray
+    levels: int
+    runtime_s: float
+    noise_std: float = 0.0
+
+    @property
+    def valid(self) -> np.ndarray:
+        """True where ``disparity`` holds a number."""
+        return self.reason == Reason.OK
+
+    def depth(self, *, focal_px: float, baseline: float, disparity_offset_px: float = 0.0) -> np.ndarray:
+        """Depth ``Z = f b / (d + offset)`` (paper eq. 6 with ``d = f b / Z``).
+
+        Parameters
+        ----------
+        focal_px : float
+            Focal length in pixels.
+        baseline : float
+            Camera spacing per unit of position (scene units).
+        disparity_offset_px : float
+            Added to the disparity first (e.g. Middlebury's ``dmin`` for
+            cropped images, in px per unit position).
+
+        Returns
+        -------
+        ndarray
+            Depth in the units of ``baseline``; NaN where the disparity is
+            unknown or ``d + offset <= 0``.
+        """
+        f = check_positive_finite("focal_px", focal_px)
+        b = check_positive_finite("baseline", baseline)
+        off = float(disparity_offset_px)
+        if not np.isfinite(off):
+            msg = f"disparity_offset_px must be finite, got {disparity_offset_px!r}"
+            raise ValueError(msg)
+        total = self.disparity.astype(np.float64) + off
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = f * b / total
+        return np.where(np.isfinite(total) & (total > 0), z, np.nan)
+
+
+def auto_levels(shape, *, min_size_px: int = 24) -> int:
+    """Pyramid levels: halve until the smaller side would drop below ``min_size_px``."""
+    side = min(shape)
+    levels = 1
+    while side // 2 >= min_size_px:
+        side //= 2
+        levels += 1
+    return levels
+
+
+def _cell_noise_gain(sigma_px: float) -> float:
+    """Std of one cell value per unit white-noise std: Gaussian, half shift, 2x2 cell mean.
+
+    The half-pixel shift of the warp (linear interpolation at +-1/2) and the
+    stencil's 2 x 2 cell mean together are the filter ``[1 2 1] / 4`` per axis.
+    """
+    if sigma_px > 0:
+        radius = max(1, int(np.ceil(4.0 * sigma_px)))
+        g = cv2.getGaussianKernel(2 * radius + 1, sigma_px, cv2.CV_64F).ravel()
+    else:
+        g = np.array([1.0])
+    k = np.convolve(g, [0.25, 0.5, 0.25])
+    return float(np.sum(k**2))  # 2-D separable: sqrt((sum k^2)^2)
+
+
+def _noise_correlation_area(sigma_px: float) -> float:
+    """Noise-equivalent area (cells) of the smoothed noise: ``(sum k)^2 / sum k^2`` in 2-D."""
+    if sigma_px > 0:
+        radius = max(1, int(np.ceil(4.0 * sigma_px)))
+        g = cv2.getGaussianKernel(2 * radius + 1, sigma_px, cv2.CV_64F).ravel()
+    else:
+        g = np.array([1.0])
+    k = np.convolve(g, [0.25, 0.5, 0.25])
+    return float((1.0 / np.sum(k**2)) ** 2)
+
+
+def _blur(a: np.ndarray, sigma: float) -> np.ndarray:
+    radius = max(1, int(np.ceil(3.0 * sigma)))
+    return cv2.GaussianBlur(a, (2 * radius + 1, 2 * radius + 1), sigma, borderType=cv2.BORDER_REFLECT)
+
+
+def _nodes_from_pixels(d: np.ndarray) -> np.ndarray:
+    """Values at the half-shifted nodes ``(r - 1/2, c - 1/2)``: mean of the 4 pixels around."""
+    p = np.pad(d, 1, mode="edge")
+    return 0.25 * (p[:-1, :-1] + p[:-1, 1:] + p[1:, :-1] + p[1:, 1:])
+
+
+@dataclass
+class _Measurement:
+    slope: np.ndarray  # I_t: weighted LS slope of warped intensity vs position, per cell (= pixel)
+    grad_col: np.ndarray
+    grad_row: np.ndarray
+    s_tt: np.ndarray
+    chi2: np.ndarray  # weighted sum of squared residuals (intensity^2)
+    dof: np.ndarray
+    count: np.ndarray
+    ref_nodes: np.ndarray  # the reference on the node grid (H+1, W+1)
+    weights: list  # per view (reference: None), the occlusion weight of every pixel
+
+
+def _regress(t, ref, diffs, weights):
+    """Weighted LS of ``D_k`` (cell mean of ``W_k - W_ref``) on ``t_k``, reference included at (0, 0)."""
+    shape = diffs[next(k for k in range(len(t)) if k != ref)].shape
+    sum_m = np.ones(shape, np.float32)
+    sum_t = np.zeros(shape, np.float32)
+    sum_tt = np.zeros(shape, np.float32)
+    sum_d = np.zeros(shape, np.float32)
+    sum_dd = np.zeros(shape, np.float32)
+    sum_td = np.zeros(shape, np.float32)
+    for k, (diff, wk) in enumerate(zip(diffs, weights)):
+        if k == ref:
+            continue
+        tk = np.float32(t[k])
+        sum_m += wk
+        sum_t += wk * tk
+        sum_tt += wk * tk * tk
+        sum_d += wk * diff
+        sum_dd += wk * diff * diff
+        sum_td += wk * tk * diff
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tbar = sum_t / sum_m
+        dbar = sum_d / sum_m
+        s_tt = sum_tt - sum_m * tbar * tbar
+        s_td = sum_td - sum_m * tbar * dbar
+        s_dd = sum_dd - sum_m * dbar * dbar
+        slope = np.where(s_tt > 1e-6, s_td / s_tt, 0.0).astype(np.float32)
+    chi2 = np.maximum(s_dd - slope * s_td, 0.0).astype(np.float32)
+    s_tt = np.where(s_tt > 1e-6, s_tt, 0.0).astype(np.float32)
+    return slope, s_tt, chi2, sum_m
+
+
+def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
+    """Down-weight views that do not match the reference locally (occlusion).
+
+    ``E_k`` = local mean of ``(W_k - W_ref)^2 / t_k^2``: after warping, a view
+    that sees the point has ``E_k`` near the noise level (plus the common
+    ``delta^2 G^2``); one where it is hidden has a much larger ``E_k``. Views
+    within a factor 2 of the best keep weight 1 (so pure noise never changes
+    the weights); beyond it the weight falls as ``(2 E_best / E_k)^2``.
+    Views whose warp left the image get 0.
+    """
+    energies = {}
+    for k, diff in enumerate(diffs):
+        if k == ref:
+            continue
+        e = _blur(diff * diff, window_px) / np.float32(t[k] ** 2)
+        energies[k] = np.where(inside[k] > 0, e, np.inf)
+    best = np.minimum.reduce(list(energies.values()))
+    out = [None] * len(diffs)
+    for k, e in energies.items():
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            ratio = 2.0 * (best + floor) / (e + floor)
+        w = np.where(np.isfinite(ratio), np.minimum(ratio, 1.0) ** 2, 0.0)
+        out[k] = (w * inside[k]).astype(np.float32)
+    return out
+
+
+def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True) -> _Measurement:
+    """Warp every view with ``d_pix`` and fit the intensity-vs-position slope per pixel."""
+    h, w = d_pix.shape
+    rows = (np.arange(h + 1, dtype=np.float32) - 0.5)[:, None]
+    cols = (np.arange(w + 1, dtype=np.float32) - 0.5)[None, :]
+    d_nodes = _nodes_from_pixels(d_pix).astype(np.float32)
+    map_y = np.broadcast_to(rows, (h + 1, w + 1)).astype(np.float32)
+    ref_nodes = cv2.remap(smoothed[ref], np.broadcast_to(cols, (h + 1, w + 1)).astype(np.float32), map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    n = len(smoothed)
+    diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
+    for k in range(n):
+        if k == ref:
+            continue
+        map_x = (cols - t[k] * d_nodes).astype(np.float32)
+        warped = cv2.remap(smoothed[k], map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        inside_nodes = (map_x >= -0.5) & (map_x <= w - 0.5)
+        inside[k] = (inside_nodes[:-1, :-1] & inside_nodes[:-1, 1:] & inside_nodes[1:, :-1] & inside_nodes[1:, 1:]).astype(np.float32)
+        # Paper section 3.1 stencil on the pair (reference, view k): grad_t * 1 = cell mean of W_k - W_ref
+        pair = gradients([ref_nodes, warped], frame_interval=1.0, stencil="matched")
+        diffs[k], gcs[k], grs[k] = pair.grad_t, pair.grad_col, pair.grad_row
+    weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px) if robust else inside
+    slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, weights)
+    wsum = np.zeros((h, w), np.float32)
+    gc = np.zeros((h, w), np.float32)
+    gr = np.zeros((h, w), np.float32)
+    for k in range(n):
+        if k == ref:
+            continue
+        wsum += weights[k]
+        gc += weights[k] * gcs[k]
+        gr += weights[k] * grs[k]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        grad_col = np.where(wsum > 0, gc / wsum, 0.0).astype(np.float32)
+        grad_row = np.where(wsum > 0, gr / wsum, 0.0).astype(np.float32)
+    return _Measurement(slope, grad_col, grad_row, s_tt, chi2, sum_m - 2.0, sum_m, ref_nodes, weights)
+
+
+_TILE = 1024  # patches per tile row (cv2.remap needs fewer than 32767 columns)
+
+
+def _edge_patches(smoothed_k, rows, cols, shift):
+    """4 x 4 node patches around pixels ``(rows, cols)``, each warped by its own constant shift.
+
+    The patches are tiled into a ``(4 R, 4 C)`` image (``C = _TILE``); the
+    centre cell of patch ``i`` is cell ``[4 (i // C) + 1, 4 (i % C) + 1]`` of
+    its gradient field, and the stencil of that cell reads only its own patch.
+    """
+    offs = np.array([-1.5, -0.5, 0.5, 1.5], np.float32)
+    n = rows.size
+    n_rows = max(1, -(-n // _TILE))
+    total = n_rows * _TILE
+    pr = np.zeros(total, np.float32)
+    pc = np.zeros(total, np.float32)
+    ps = np.zeros(total, np.float32)
+    pr[:n], pc[:n], ps[:n] = rows, cols, shift
+    pr, pc, ps = (a.reshape(n_rows, _TILE) for a in (pr, pc, ps))
+    map_y = pr[:, None, :, None] + offs[None, :, None, None] + np.zeros((1, 1, 1, 4), np.float32)
+    map_x = pc[:, None, :, None] - ps[:, None, :, None] + offs[None, None, None, :] + np.zeros((1, 4, 1, 1), np.float32)
+    map_x = map_x.reshape(4 * n_rows, 4 * _TILE).astype(np.float32)
+    map_y = map_y.reshape(4 * n_rows, 4 * _TILE).astype(np.float32)
+    patch = cv2.remap(smoothed_k, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    w = smoothed_k.shape[1]
+    inside = ((map_x >= -0.5) & (map_x <= w - 0.5)).reshape(n_rows, 4, _TILE, 4).all(axis=(1, 3)).ravel()[:n]
+    return patch, inside
+
+
+def _patch_centres(a: np.ndarray, n: int) -> np.ndarray:
+    """Centre-cell values of the tiled patches (see :func:`_edge_patches`)."""
+    return a[1::4, 1::4].ravel()[:n]
+
+
+def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations):
+    """Point-wise refinement (paper eq. 6 per point) with a locally constant disparity.
+
+    ``weights[k]`` are the views' occlusion weights at the points (from the
+    dense field), kept fixed.
+    """
+    d = d0.astype(np.float32).copy()
+    rows = rows.astype(np.float32)
+    cols = cols.astype(np.float32)
+    n = len(smoothed)
+    npts = d.size
+    ref_patch, _ = _edge_patches(smoothed[ref], rows, cols, np.zeros_like(d))
+    result = None
+    for _ in range(max(1, iterations)):
+        diffs, gcs, wts = [None] * n, [None] * n, [None] * n
+        for k in range(n):
+            if k == ref:
+                continue
+            patch, inside = _edge_patches(smoothed[k], rows, cols, t[k] * d)
+            g = gradients([ref_patch, patch], frame_interval=1.0, stencil="matched")
+            diffs[k] = _patch_centres(g.grad_t, npts)
+            gcs[k] = _patch_centres(g.grad_col, npts)
+            wts[k] = (weights[k] * inside).astype(np.float32)
+        slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, wts)
+        wsum = np.sum([wts[k] for k in range(n) if k != ref], axis=0)
+        gsum = np.sum([wts[k] * gcs[k] for k in range(n) if k != ref], axis=0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gcol = np.where(wsum > 0, gsum / wsum, 0.0)
+            delta = np.where(np.abs(gcol) > 0, slope / gcol, 0.0)
+        delta = np.clip(np.nan_to_num(delta), -1.0, 1.0).astype(np.float32)
+        d = d + delta
+        result = (d, gcol, s_tt, chi2, sum_m - 2.0, sum_m)
+    return result
+
+
+def _check_positions(positions, n, reference):
+    if positions is None:
+        pos = np.arange(n, dtype=np.float64)
+    else:
+        try:
+            pos = np.asarray(positions, dtype=np.float64)
+        except (TypeError, ValueError):
+            msg = f"positions must be {n} numbers, got {positions!r}"
+            raise TypeError(msg) from None
+        if pos.shape != (n,):
+            msg = f"positions must hold one number per view ({n}), got shape {pos.shape}"
+            raise ValueError(msg)
+        if not np.all(np.isfinite(pos)):
+            msg = f"positions must be finite, got {pos.tolist()}"
+            raise ValueError(msg)
+        if not np.all(np.diff(pos) > 0):
+            msg = f"positions must be strictly increasing (views ordered along the baseline), got {pos.tolist()}"
+            raise ValueError(msg)
+    return pos - pos[reference]
+
+
+def static_stereo(
+    views,
+    *,
+    reference: int,
+    positions=None,
+    axis: str = "x",
+    sigma_px: float = 1.0,
+    levels: int | None = None,
+    edges_only: bool = False,
+    noise_std: float | None = None,
+    min_gradient: float | None = None,
+    max_corner_ratio: float = 0.1,
+    min_cos: float = 0.25,
+    iterations_per_level: int = 3,
+    edge_iterations: int = 3,
+    dense_window_px: float = 4.0,
+    select_window_px: float = 2.0,
+    max_std_px: float = 1.0,
+    max_edge_std_px: float = 0.15,
+    median_px: int = 5,
+    dtype=np.float32,
+) -> StereoResult:
+    """Dense multi-view disparity from relative normal flow, coarse to fine.
+
+    The paper's static stereo (section 2.3) treats views along a baseline as
+    a sequence seen by a moving camera and recovers depth from its normal
+    flow with eq. 6, ``Z = f dVx cos(alpha) / dVn``. In disparity form
+    (``d = f b / Z``) the residual disparity after warping is ``delta =
+    -Vn / cos(alpha) = I_t / I_col``; see the module docstring for the
+    pyramid, the warping, the multi-view least squares and the pixel grid.
+
+    Parameters
+    ----------
+    views : sequence of >= 2 ndarray, shape (H, W)
+        Grey views (3 or more recommended), ordered so that the camera moves
+        toward +X (``axis="x"``) or +Y (``axis="y"``) from first to last:
+        scene points shift toward -col (-row).
+    reference : int
+        Index of the view that gets the output.
+    positions : sequence of float, optional
+        Camera positions along the baseline in units of the neighbour spacing,
+        strictly increasing; default ``0, 1, 2, ...``. The disparity is per
+        unit of position.
+    axis : {"x", "y"}
+        Baseline direction. ``"y"`` is ``"x"`` on the transposed views.
+    sigma_px : float
+        Gaussian smoothing at every pyramid level (px of that level).
+    levels : int, optional
+        Pyramid levels (1 = single level, the paper's method, for motions up
+        to about 1-2 px per unit position). Default :func:`auto_levels`.
+    edges_only : bool
+        Output only the edge points (``disparity`` NaN elsewhere, reason
+        ``NOT_EDGE`` / ``CORNER``).
+    noise_std : float, optional
+        Image noise std (grey levels); default estimated from the views
+        (:func:`nfdepth.normal_flow.estimate_noise_std`).
+    min_gradient : float, optional
+        Edge-point gradient threshold (intensity per px), default as in
+        :func:`nfdepth.edges.select_edge_points`.
+    max_corner_ratio : float
+        Structure-tensor corner rule for edge points.
+    min_cos : float
+        Edge points with ``|cos(alpha)|`` below this (normal nearly
+        perpendicular to the baseline; ``B ~ 0`` in eq. 4) are
+        ``UNDETERMINABLE``.
+    iterations_per_level : int
+        Warp-and-update iterations per level.
+    edge_iterations : int
+        Point-wise refinement iterations of the edge points.
+    dense_window_px : float
+        Standard deviation of the normalised-convolution window (px at every
+        level).
+    select_window_px : float
+        Standard deviation of the window over which each view's match to the
+        reference is measured for occlusion weighting (px).
+    max_std_px : float
+        Dense pixels whose predicted std (px per unit position) exceeds this
+        are ``UNCERTAIN`` (NaN).
+    max_edge_std_px : float
+        The same bound for edge points. Their std includes the model error
+        (reduced chi^2 of the multi-view fit), which is what flags edge
+        points on occlusion boundaries and nearly horizontal edges under a
+        slight vertical misalignment; ``inf`` keeps them all.
+    median_px : int
+        Median filter size applied to the dense field after each level
+        (0 or 1: none; 3 or 5).
+    dtype : float32
+        Working precision (float32; float64 is accepted and converted).
+
+    Returns
+    -------
+    StereoResult
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 views, ``reference`` out of range, ``positions`` of the
+        wrong length or not strictly increasing, ``axis`` not "x"/"y".
+    """
+    start = time.perf_counter()
+    float_dtype(dtype)
+    if axis not in ("x", "y"):
+        msg = f"axis must be 'x' or 'y', got {axis!r}"
+        raise ValueError(msg)
+    views = as_frames("views", views, min_count=2, dtype=np.float32)
+    n = len(views)
+    if isinstance(reference, bool) or not isinstance(reference, (int, np.integer)):
+        msg = f"reference must be an int view index, got {reference!r}"
+        raise TypeError(msg)
+    if not 0 <= int(reference) < n:
+        msg = f"reference must be a view index in 0..{n - 1}, got {reference!r}"
+        raise ValueError(msg)
+    ref = int(reference)
+    t = _check_positions(positions, n, ref)
+    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    dense_window_px = check_positive_finite("dense_window_px", dense_window_px)
+    max_std_px = check_positive_finite("max_std_px", max_std_px)
+    max_edge_std_px = float(max_edge_std_px)
+    if not max_edge_std_px > 0:
+        msg = f"max_edge_std_px must be > 0 (inf allowed), got {max_edge_std_px!r}"
+        raise ValueError(msg)
+    if median_px not in (0, 1, 3, 5):
+        msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
+        raise ValueError(msg)
+    if int(iterations_per_level) < 1 or int(edge_iterations) < 0:
+        msg = "iterations_per_level must be >= 1 and edge_iterations >= 0"
+        raise ValueError(msg)
+    if axis == "y":
+        views = [np.ascontiguousarray(v.T) for v in views]
+    shape = views[0].shape
+    if levels is None:
+        levels = auto_levels(shape)
+    elif int(levels) < 1 or (min(shape) >> (int(levels) - 1)) < 4:
+        msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
+        raise ValueError(msg)
+    levels = int(levels)
+    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
+    spread = float(np.percentile(views[ref], 99) - np.percentile(views[ref], 1))
+    noise_floor = max(noise, 1e-3 * spread, 1e-6)
+
+    pyramids = [[v] for v in views]
+    for p in pyramids:
+        for _ in range(levels - 1):
+            p.append(cv2.pyrDown(p[-1]))
+    gain = _cell_noise_gain(sigma_px)
+    corr_area = _noise_correlation_area(sigma_px)
+
+    d = np.zeros(pyramids[0][-1].shape, np.float32)
+    var = np.full(d.shape, np.inf, np.float32)
+    for level in range(levels - 1, -1, -1):
+        smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
+        s_c = noise_floor * _PYRDOWN_NOISE**level * gain  # noise std of one cell value
+        if level < levels - 1:
+            h, w = smoothed[0].shape
+            d = 2.0 * cv2.resize(d, (w, h), interpolation=cv2.INTER_LINEAR)
+            var = 4.0 * cv2.resize(var, (w, h), interpolation=cv2.INTER_LINEAR)
+        for _ in range(int(iterations_per_level)):
+            m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+            info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
+            num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
+            den = _blur(info, dense_window_px)
+            den2 = _blur(info, dense_window_px / np.sqrt(2.0))  # sum K^2 w up to a constant
+            # model error: local reduced chi^2 of the LS residuals (>= 3 views)
+            dof = np.maximum(m.dof, 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                red = _blur(m.chi2, dense_window_px) / (_blur(dof, dense_window_px) * s_c**2)
+            red = np.where(np.isfinite(red), np.maximum(red, 1.0), 1.0).astype(np.float32)
+            k2 = 1.0 / (4.0 * np.pi * dense_window_px**2)  # sum K^2 / (sum K)^2 for a 2-D Gaussian
+            with np.errstate(divide="ignore", invalid="ignore"):
+                delta = num / den
+                # var of sum K w delta / sum K w for correlated cells; den2 / den >= 1
+                # guards windows whose information sits only in the tails
+                v_new = s_c**2 * red * corr_area * k2 * np.maximum(den2 / den, 1.0) / den
+            ok = np.isfinite(delta) & (den > 0) & np.isfinite(v_new)
+            delta = np.where(ok, np.clip(delta, -1.0, 1.0), 0.0).astype(np.float32)
+            d = d + delta
+            var = np.where(ok, v_new, var).astype(np.float32)
+        if median_px > 1:
+            d = cv2.medianBlur(d, median_px)
+    # final measurement at the finest level for validity, edges and uncertainty
+    m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+    field = GradientField(m.grad_col, m.grad_row, m.slope)
+    selection = select_edge_points(field, m.ref_nodes, min_gradient=min_gradient, max_corner_ratio=max_corner_ratio, corner_window_px=max(sigma_px, 1.0))
+    edge_mask = selection.mask
+    h, w = d.shape
+    reason = np.full((h, w), Reason.OK, np.uint8)
+    std = np.sqrt(var).astype(np.float32)
+    reason[~np.isfinite(std)] = Reason.UNDETERMINABLE
+    reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
+    reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
+
+    er, ec = np.nonzero(edge_mask)
+    disparity = d.copy()
+    if er.size:
+        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], [None if wk is None else wk[er, ec] for wk in m.weights], int(edge_iterations))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos = np.abs(m.grad_col[er, ec]) / np.hypot(m.grad_col[er, ec], m.grad_row[er, ec])
+            v_e = s_c**2 / (g_e**2 * stt_e)
+            # model error from the edge points' own residuals, pooled over neighbouring edge points
+            chi_map = np.zeros((h, w), np.float32)
+            dof_map = np.zeros((h, w), np.float32)
+            chi_map[er, ec] = chi2_e / s_c**2
+            dof_map[er, ec] = np.maximum(dof_e, 0.0)
+            red_e = (_blur(chi_map, dense_window_px) / _blur(dof_map, dense_window_px))[er, ec]
+        red_e = np.where(np.isfinite(red_e), np.maximum(red_e, 1.0), 1.0)
+        std_e = np.sqrt(v_e * red_e)
+        r_e = np.full(er.size, Reason.OK, np.uint8)
+        r_e[~(cos >= min_cos)] = Reason.UNDETERMINABLE
+        r_e[(r_e == Reason.OK) & ((cnt_e < 2) | ~np.isfinite(std_e))] = Reason.NO_DATA
+        r_e[(r_e == Reason.OK) & (std_e > max_edge_std_px)] = Reason.UNCERTAIN
+        disparity[er, ec] = d_e
+        std[er, ec] = std_e
+        reason[er, ec] = r_e
+    if edges_only:
+        off = ~edge_mask
+        reason[off] = Reason.NOT_EDGE
+        reason[off & selection.corner] = Reason.CORNER
+    reason[(reason == Reason.OK) & ~(disparity > -0.5)] = Reason.NOT_POSITIVE
+    bad = reason != Reason.OK
+    disparity = np.where(bad, np.nan, disparity).astype(np.float32)
+    std = np.where(bad, np.nan, std).astype(np.float32)
+    if axis == "y":
+        disparity, std, edge_mask, reason = (np.ascontiguousarray(a.T) for a in (disparity, std, edge_mask, reason))
+    return StereoResult(
+        disparity=disparity,
+        uncertainty=std,
+        edge_mask=edge_mask,
+        reason=reason,
+        levels=levels,
+        runtime_s=time.perf_counter() - start,
+        noise_std=noise,
+    )
