@@ -1,0 +1,320 @@
+"""Speed benchmarks: nfdepth's fast paths against OpenCV baselines and a floor.
+
+Everything runs in one process, OpenCV on one thread (``cv2.setNumThreads(1)``)
+unless ``threads`` says otherwise, the cases *interleaved*: each round runs
+every case once (in a rotating order), after one warm-up round, and a case's
+figure is the median over rounds. Ratios compare figures from the same run.
+
+Cases (per image size and scene):
+
+``nf_edges``            :func:`nfdepth.fast.normal_flow_edges` on a triple
+``nf_edges_reference``  the plain reference (``normal_flow`` + ``select_edge_points``)
+``nf_stream_frame``     :class:`nfdepth.fast.StreamingNormalFlow`, cost per pushed frame
+``nf_static_stereo``    ``nfdepth.stereo.static_stereo`` on three views (skipped if
+                        the module is missing or the call fails)
+``cv_sgbm``             ``cv2.StereoSGBM`` (64 disparities, block 5) on a uint8 pair
+``cv_bm``               ``cv2.StereoBM`` (64 disparities, block 15) on a uint8 pair
+``cv_dis_fast/medium``  ``cv2.DISOpticalFlow`` presets on a uint8 pair
+``floor_blur3``         three ``cv2.GaussianBlur`` (sigma as nfdepth's) of the float32 frames
+``floor_copy3``         a copy of the three float32 frames
+
+Peak memory is measured with :mod:`tracemalloc` in a separate, untimed call:
+it counts every NumPy array (including the arrays OpenCV returns, which
+NumPy allocates) and Python objects, not OpenCV's internal scratch buffers.
+The nfdepth fast path's cached workspace is dropped first so that it counts.
+``bytes_per_px`` is that peak divided by the pixels of one frame.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+__all__ = ["DEFAULT_SIZES", "run_benchmarks", "render_markdown", "bench_main"]
+
+DEFAULT_SIZES = ((480, 640), (960, 1280), (1920, 2560))
+SIGMA_PX = 2.0
+_ART = Path(__file__).resolve().parents[3] / "shared" / "data" / "middlebury2005" / "Art"
+
+
+def _data_root() -> Path:
+    env = os.environ.get("NFDEPTH_DATA")
+    if env:
+        return Path(env) / "middlebury2005" / "Art"
+    return _ART
+
+
+# ------------------------------------------------------------------ scenes
+
+
+def _rendered(shape, n=3, shift=0.8, seed=0):
+    """A rendered-like scene: smoothed random regions moving by sub-pixel steps."""
+    H, W = shape
+    rng = np.random.default_rng(seed)
+    pad = 16
+    small = rng.random(((H + 2 * pad) // 8 + 1, (W + 2 * pad) // 8 + 1)).astype(np.float32)
+    base = cv2.resize(small, (W + 2 * pad, H + 2 * pad), interpolation=cv2.INTER_CUBIC)
+    base = np.where(base > 0.5, 200.0, 60.0).astype(np.float32)
+    base = cv2.GaussianBlur(base, (0, 0), 1.0)
+    frames = []
+    for k in range(n):
+        t = k - (n - 1) / 2
+        M = np.float32([[1, 0, shift * t], [0, 1, 0]])
+        warped = cv2.warpAffine(base, M, (W + 2 * pad, H + 2 * pad), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        frames.append(np.ascontiguousarray(warped[pad : pad + H, pad : pad + W]))
+    return frames
+
+
+def _middlebury(shape):
+    """Art views 0..6 scaled to cover ``shape`` and centre-cropped (grey float32), or None."""
+    root = _data_root()
+    paths = [root / f"view{i}.png" for i in range(7)]
+    if not all(p.is_file() for p in paths):
+        return None
+    H, W = shape
+    out = []
+    for p in paths[2:5]:  # three neighbouring views
+        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
+        if img is None:
+            return None
+        s = max(H / img.shape[0], W / img.shape[1])
+        size = (max(W, int(round(img.shape[1] * s))), max(H, int(round(img.shape[0] * s))))
+        img = cv2.resize(img, size, interpolation=cv2.INTER_CUBIC if s > 1 else cv2.INTER_AREA)
+        r0, c0 = (img.shape[0] - H) // 2, (img.shape[1] - W) // 2
+        out.append(np.ascontiguousarray(img[r0 : r0 + H, c0 : c0 + W]).astype(np.float32))
+    return out
+
+
+# ------------------------------------------------------------------- cases
+
+
+def _cases(frames, *, include_reference: bool):
+    from . import fast
+    from .edges import select_edge_points
+    from .normal_flow import gaussian_smooth, normal_flow
+
+    f32 = frames
+    u8 = [np.clip(f, 0, 255).astype(np.uint8) for f in frames]
+    radius = max(1, int(np.ceil(4.0 * SIGMA_PX)))
+    ks = (2 * radius + 1, 2 * radius + 1)
+    cases = {}
+
+    cases["nf_edges"] = lambda: fast.normal_flow_edges(f32, sigma_px=SIGMA_PX)
+
+    if include_reference:
+
+        def reference():
+            g = normal_flow(f32, sigma_px=SIGMA_PX)
+            return select_edge_points(g, gaussian_smooth(f32[1], sigma_px=SIGMA_PX), corner_window_px=max(SIGMA_PX, 1.0))
+
+        cases["nf_edges_reference"] = reference
+
+    stream = fast.StreamingNormalFlow(sigma_px=SIGMA_PX)
+    for f in f32[:2]:
+        stream.push(f)
+    counter = [0]
+
+    def stream_push():
+        counter[0] += 1
+        return stream.push(f32[counter[0] % 3])
+
+    cases["nf_stream_frame"] = stream_push
+
+    try:
+        from .stereo import static_stereo  # written in parallel; may not exist yet
+
+        static_stereo(f32, reference=1)  # probe once (also warms up)
+        cases["nf_static_stereo"] = lambda: static_stereo(f32, reference=1)
+    except Exception as exc:  # noqa: BLE001 - any failure means "skip this case"
+        cases["nf_static_stereo"] = f"skipped: {type(exc).__name__}: {exc}"[:200]
+
+    sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=64, blockSize=5)
+    bm = cv2.StereoBM_create(numDisparities=64, blockSize=15)
+    # Views run left to right along +X: the right image of a pair is the later view.
+    cases["cv_sgbm"] = lambda: sgbm.compute(u8[0], u8[1])
+    cases["cv_bm"] = lambda: bm.compute(u8[0], u8[1])
+    dis_fast = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_FAST)
+    dis_medium = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
+    cases["cv_dis_fast"] = lambda: dis_fast.calc(u8[0], u8[1], None)
+    cases["cv_dis_medium"] = lambda: dis_medium.calc(u8[0], u8[1], None)
+    cases["floor_blur3"] = lambda: [cv2.GaussianBlur(f, ks, SIGMA_PX, sigmaY=SIGMA_PX, borderType=cv2.BORDER_REFLECT) for f in f32]
+    cases["floor_copy3"] = lambda: [f.copy() for f in f32]
+    return cases
+
+
+def _peak_bytes(fn) -> int:
+    from . import fast
+
+    fast._local.ws = None  # count the workspace too
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        result = fn()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    del result
+    return int(peak)
+
+
+def run_benchmarks(
+    *,
+    quick: bool = False,
+    sizes=None,
+    repeats: int | None = None,
+    threads: int = 1,
+    scenes=("rendered", "middlebury-art"),
+    time_budget_s: float | None = None,
+) -> list[dict]:
+    """Run the benchmark cases; one record (dict) per case, size and scene.
+
+    Parameters
+    ----------
+    quick : bool
+        Fewer sizes (0.3 and 1.2 Mpx), 5 rounds, no reference path above 0.3 Mpx.
+    sizes : sequence of (rows, cols), optional
+        Image sizes; default 0.3, 1.2 and 4.9 Mpx (quick: the first two).
+    repeats : int, optional
+        Timed rounds per size (default 20; quick 5).
+    threads : int
+        ``cv2.setNumThreads`` while timing (restored afterwards).
+    time_budget_s : float, optional
+        Per size and scene: rounds stop early (but after at least 3) once
+        this much time is spent.
+    """
+    if sizes is None:
+        sizes = DEFAULT_SIZES[:2] if quick else DEFAULT_SIZES
+    if repeats is None:
+        repeats = 5 if quick else 20
+    repeats = max(1, int(repeats))
+    if time_budget_s is None:
+        time_budget_s = 8.0 if quick else 60.0
+    old_threads = cv2.getNumThreads()
+    cv2.setNumThreads(int(threads))
+    records: list[dict] = []
+    try:
+        for H, W in sizes:
+            H, W = int(H), int(W)
+            for scene in scenes:
+                frames = _rendered((H, W)) if scene == "rendered" else _middlebury((H, W))
+                if frames is None:
+                    continue
+                include_reference = H * W <= (0.35e6 if quick else 1.3e6)
+                cases = _cases(frames, include_reference=include_reference)
+                timed = {k: v for k, v in cases.items() if callable(v)}
+                times: dict = {k: [] for k in timed}
+                for fn in timed.values():  # warm-up round
+                    fn()
+                names = list(timed)
+                start = time.perf_counter()
+                for rnd in range(repeats):
+                    order = names[rnd % len(names) :] + names[: rnd % len(names)]
+                    for name in order:
+                        t0 = time.perf_counter()
+                        timed[name]()
+                        times[name].append(time.perf_counter() - t0)
+                    if rnd >= 2 and time.perf_counter() - start > time_budget_s:
+                        break
+                med = {k: float(np.median(v)) * 1e3 for k, v in times.items()}
+                for name, case in cases.items():
+                    rec = {
+                        "name": name,
+                        "scene": scene,
+                        "height": H,
+                        "width": W,
+                        "megapixels": round(H * W / 1e6, 3),
+                        "threads": int(threads),
+                    }
+                    if not callable(case):
+                        rec.update({"median_ms": None, "skipped": case})
+                        records.append(rec)
+                        continue
+                    ms = med[name]
+                    peak = _peak_bytes(case)
+                    rec.update(
+                        {
+                            "median_ms": ms,
+                            "runs": len(times[name]),
+                            "fps": 1e3 / ms if ms > 0 else None,
+                            "ns_per_px": ms * 1e6 / (H * W),
+                            "peak_bytes": peak,
+                            "bytes_per_px": peak / (H * W),
+                            "ratio_to_sgbm": ms / med["cv_sgbm"],
+                            "ratio_to_floor": ms / med["floor_blur3"],
+                        }
+                    )
+                    records.append(rec)
+    finally:
+        cv2.setNumThreads(old_threads)
+    _add_scaling(records)
+    return records
+
+
+def _add_scaling(records):
+    """ns/px relative to the smallest size of the same case and scene (1.0 = linear)."""
+    base: dict = {}
+    for r in sorted(records, key=lambda r: r["height"] * r["width"]):
+        if r.get("median_ms") is None:
+            continue
+        key = (r["name"], r["scene"])
+        base.setdefault(key, r["ns_per_px"])
+        r["ns_per_px_vs_smallest"] = r["ns_per_px"] / base[key]
+
+
+def render_markdown(records) -> str:
+    """A markdown table of the records."""
+    head = "| case | scene | size | Mpx | median ms | fps | ns/px | ns/px vs smallest | peak MB | B/px | × SGBM | × floor |"
+    lines = [head, "|" + "---|" * 12]
+    for r in records:
+        size = f"{r['width']}×{r['height']}"
+        if r.get("median_ms") is None:
+            lines.append(f"| {r['name']} | {r['scene']} | {size} | {r['megapixels']} | {r.get('skipped', 'skipped')} |  |  |  |  |  |  |  |")
+            continue
+        lines.append(
+            f"| {r['name']} | {r['scene']} | {size} | {r['megapixels']:.1f} | {r['median_ms']:.2f} | {r['fps']:.1f} | "
+            f"{r['ns_per_px']:.1f} | {r.get('ns_per_px_vs_smallest', 1.0):.2f} | {r['peak_bytes'] / 1e6:.1f} | "
+            f"{r['bytes_per_px']:.1f} | {r['ratio_to_sgbm']:.3f} | {r['ratio_to_floor']:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+def _environment() -> dict:
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "opencv": cv2.__version__,
+        "machine": platform.machine(),
+        "processor": platform.processor(),
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def bench_main(*, json_path=None, quick: bool = False) -> int:
+    """Run the benchmarks, print the markdown table, write JSON atomically; return 0."""
+    records = run_benchmarks(quick=quick)
+    print(render_markdown(records))
+    if json_path is not None:
+        path = Path(json_path)
+        payload = {"environment": _environment(), "sigma_px": SIGMA_PX, "records": records}
+        directory = path.parent if str(path.parent) else Path(".")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+        try:
+            with os.fdopen(fd, "w") as fh:
+                json.dump(payload, fh, indent=2)
+                fh.write("\n")
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+    return 0

@@ -1,0 +1,192 @@
+"""The fast path and the streaming API against the plain reference implementation."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from nfdepth import bench
+from nfdepth.edges import select_edge_points
+from nfdepth.fast import StreamingNormalFlow, _percentile_linear, normal_flow_edges
+from nfdepth.normal_flow import gaussian_smooth, normal_flow
+
+
+def _texture(shape, seed=0):
+    H, W = shape
+    rng = np.random.default_rng(seed)
+    base = cv2.GaussianBlur(rng.random((H + 40, W + 40)), (0, 0), 3.0)
+    base = np.where(base > base.mean(), 200.0, 50.0)
+    return cv2.GaussianBlur(base, (0, 0), 1.2)
+
+
+def _sequence(shape=(96, 128), n=3, shift=(0.7, 0.25), seed=0):
+    """Smooth random regions moving by sub-pixel steps (cubic warps), float32."""
+    H, W = shape
+    base = _texture(shape, seed)
+    out = []
+    for k in range(n):
+        t = k - (n - 1) / 2
+        M = np.float64([[1, 0, shift[0] * t], [0, 1, shift[1] * t]])
+        img = cv2.warpAffine(base, M, (W + 40, H + 40), flags=cv2.INTER_CUBIC)
+        out.append(img[20:-20, 20:-20].astype(np.float32))
+    return out
+
+
+def _reference(frames, *, sigma_px, frame_interval=1.0, stencil="matched", **edge):
+    g = normal_flow(frames, sigma_px=sigma_px, frame_interval=frame_interval, stencil=stencil)
+    edge.setdefault("corner_window_px", max(sigma_px, 1.0))
+    sel = select_edge_points(g, gaussian_smooth(frames[1], sigma_px=sigma_px), **edge)
+    return g, sel
+
+
+def _assert_close(result, g, sel):
+    scale = float(np.max(g.magnitude))
+    np.testing.assert_allclose(result.magnitude, g.magnitude, rtol=0, atol=1e-5 * scale)
+    # Angles compared on the circle, where the direction is defined to float32 precision.
+    strong = g.magnitude > 1e-2 * scale
+    dal = np.angle(np.exp(1j * (result.alpha.astype(np.float64) - g.alpha)))
+    assert np.max(np.abs(dal[strong])) < 1e-3
+    assert np.max(np.abs(dal[sel.mask])) < 1e-5
+    vn_ref = g.normal_flow
+    m = sel.mask
+    np.testing.assert_allclose(result.vn[m], vn_ref[m], rtol=1e-5, atol=1e-5 * float(np.max(np.abs(vn_ref[m]))))
+    both = strong
+    np.testing.assert_allclose(result.vn[both], vn_ref[both], rtol=0, atol=1e-4 * float(np.max(np.abs(vn_ref[both]))))
+    assert result.min_gradient == pytest.approx(sel.min_gradient, rel=1e-5)
+    # Masks: identical (ties at a threshold could differ; none occur here).
+    np.testing.assert_array_equal(result.mask, sel.mask)
+    assert sel.mask.sum() > 50
+
+
+@pytest.mark.parametrize("stencil", ["matched", "simpson", "paper"])
+@pytest.mark.parametrize("sigma_px", [0.0, 1.3, 2.0])
+def test_fast_matches_reference(stencil, sigma_px):
+    frames = _sequence()
+    g, sel = _reference(frames, sigma_px=sigma_px, frame_interval=0.5, stencil=stencil)
+    result = normal_flow_edges(frames, sigma_px=sigma_px, frame_interval=0.5, stencil=stencil)
+    assert result.vn.shape == result.mask.shape == (95, 127)
+    assert result.vn.dtype == np.float32 and result.mask.dtype == bool
+    _assert_close(result, g, sel)
+    vn, alpha, mag, mask = result
+    assert vn is result.vn and mask is result.mask
+
+
+def test_fast_matches_reference_options():
+    frames = _sequence((70, 90), shift=(-0.4, 0.9), seed=3)
+    opts = {"min_gradient": 5.0, "max_corner_ratio": 0.3, "corner_window_px": 1.5, "border_px": 4}
+    g, sel = _reference(frames, sigma_px=1.5, **opts)
+    result = normal_flow_edges(frames, sigma_px=1.5, **opts)
+    _assert_close(result, g, sel)
+    assert result.min_gradient == 5.0
+
+
+def test_fast_exact_on_ramp():
+    r, c = np.mgrid[0:12, 0:16].astype(np.float32)
+    frames = [2.0 * c + 3.0 * r - 5.0 * t for t in (-1, 0, 1)]
+    res = normal_flow_edges(frames, sigma_px=0.0)
+    inner = (slice(1, -1), slice(1, -1))  # the matched stencil's edge padding bends the ramp at the border
+    np.testing.assert_allclose(res.magnitude[inner], np.hypot(2.0, 3.0), rtol=1e-6)
+    np.testing.assert_allclose(res.alpha[inner], np.arctan2(3.0, 2.0), atol=1e-6)
+    np.testing.assert_allclose(res.vn[inner], 5.0 / np.hypot(2.0, 3.0), rtol=1e-6)
+    ref = normal_flow(frames, sigma_px=0.0)
+    np.testing.assert_allclose(res.magnitude, ref.magnitude, rtol=1e-6)
+    assert not res.mask.any()  # no zero crossings on a ramp
+
+
+def test_fast_flat_image_has_no_edges():
+    # The reference takes differences first and gets exact zeros (vn NaN); the
+    # fast path sums kernel taps, which leaves float32 rounding (~1e-7 of the
+    # intensity) instead. Either way: no gradient to speak of, no edge points.
+    frames = [np.full((10, 12), 7.0, np.float32)] * 3
+    res = normal_flow_edges(frames, sigma_px=0.0)
+    assert np.all(res.magnitude < 1e-5) and not res.mask.any()
+    assert np.all(np.isnan(res.vn) | (np.abs(res.vn) < 1e-3) | (res.magnitude < 1e-5))
+
+
+def test_streaming_equals_from_scratch():
+    frames = _sequence((64, 80), n=7, shift=(0.6, -0.3), seed=5)
+    stream = StreamingNormalFlow(sigma_px=1.8, frame_interval=0.25)
+    assert stream.push(frames[0]) is None
+    assert stream.push(frames[1]) is None
+    for t in range(2, len(frames)):
+        got = stream.push(frames[t])
+        want = normal_flow_edges(frames[t - 2 : t + 1], sigma_px=1.8, frame_interval=0.25)
+        scale = float(np.max(want.magnitude))
+        np.testing.assert_allclose(got.magnitude, want.magnitude, rtol=0, atol=1e-5 * scale)
+        m = want.mask
+        np.testing.assert_allclose(got.vn[m], want.vn[m], rtol=1e-5, atol=1e-5 * float(np.max(np.abs(want.vn[m]))))
+        np.testing.assert_allclose(got.alpha[m], want.alpha[m], atol=1e-5)
+        np.testing.assert_array_equal(got.mask, want.mask)
+    assert stream.frames_seen == len(frames)
+    stream.reset()
+    assert stream.push(frames[0]) is None
+
+
+def test_streaming_bad_input():
+    stream = StreamingNormalFlow(sigma_px=1.0)
+    stream.push(np.zeros((10, 12)))
+    with pytest.raises(ValueError, match="shape"):
+        stream.push(np.zeros((11, 12)))
+    with pytest.raises(ValueError, match="non-finite"):
+        stream.push(np.full((10, 12), np.nan))
+    with pytest.raises(ValueError, match="grey"):
+        stream.push(np.zeros((10, 12, 3)))
+    with pytest.raises(ValueError, match="sigma_px"):
+        StreamingNormalFlow(sigma_px=-1.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "match"),
+    [
+        ({"sigma_px": -1.0}, ValueError, "sigma_px"),
+        ({"sigma_px": 1.0, "frame_interval": 0.0}, ValueError, "frame_interval"),
+        ({"sigma_px": 1.0, "stencil": "sobel"}, ValueError, "stencil must be one of"),
+        ({"sigma_px": 1.0, "max_corner_ratio": 1.5}, ValueError, "max_corner_ratio"),
+        ({"sigma_px": 1.0, "min_gradient": -2.0}, ValueError, "min_gradient"),
+        ({"sigma_px": 1.0, "corner_window_px": 0.0}, ValueError, "corner_window_px"),
+        ({"sigma_px": 1.0, "border_px": -1}, ValueError, "border_px"),
+        ({"sigma_px": "wide"}, TypeError, "sigma_px"),
+    ],
+)
+def test_fast_bad_parameters(kwargs, exc, match):
+    frames = _sequence((20, 24))
+    with pytest.raises(exc, match=match):
+        normal_flow_edges(frames, **kwargs)
+
+
+def test_fast_bad_frames():
+    frames = _sequence((20, 24))
+    with pytest.raises(ValueError, match="exactly 3 frames"):
+        normal_flow_edges(frames[:2], sigma_px=1.0)
+    with pytest.raises(ValueError, match="same shape"):
+        normal_flow_edges([frames[0], frames[1], frames[2][:-1]], sigma_px=1.0)
+    bad = [f.copy() for f in frames]
+    bad[1][3, 4] = np.inf
+    with pytest.raises(ValueError, match="non-finite"):
+        normal_flow_edges(bad, sigma_px=1.0)
+    with pytest.raises(TypeError, match="sequence"):
+        normal_flow_edges("abc", sigma_px=1.0)
+
+
+@pytest.mark.parametrize("n", [4096, 5000, 12345, 307_200])
+def test_percentile_matches_numpy(n):
+    rng = np.random.default_rng(n)
+    for values in (rng.random(n).astype(np.float32), rng.exponential(size=n).astype(np.float32), np.round(rng.random(n) * 10).astype(np.float32)):
+        arr = values.reshape(-1, 64) if n % 64 == 0 else values
+        assert _percentile_linear(arr, 99.0) == float(np.percentile(arr, 99.0))
+
+
+def test_bench_records_well_formed():
+    records = bench.run_benchmarks(quick=True, sizes=[(120, 160)], repeats=3)
+    names = {r["name"] for r in records}
+    assert {"nf_edges", "nf_stream_frame", "cv_sgbm", "cv_bm", "cv_dis_fast", "cv_dis_medium", "floor_blur3", "floor_copy3"} <= names
+    for r in records:
+        assert r["height"] == 120 and r["width"] == 160
+        if r["median_ms"] is None:
+            assert r["skipped"].startswith("skipped")
+            continue
+        assert r["median_ms"] > 0 and r["runs"] >= 1 and r["peak_bytes"] >= 0
+        assert r["ratio_to_sgbm"] > 0 and r["ratio_to_floor"] > 0
+    table = bench.render_markdown(records)
+    assert table.startswith("| case |") and "nf_edges" in table
