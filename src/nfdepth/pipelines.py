@@ -175,10 +175,10 @@ def dynamic_stereo(
     camera: PinholeCamera,
     relative_motion: RigidMotion,
     frame_interval: float = 1.0,
-    sigma_px: float = 2.5,
+    sigma_px: float = 3.0,
     stencil: str = "matched",
     min_gradient: float | None = None,
-    max_corner_ratio: float = 0.1,
+    max_corner_ratio: float = 0.05,
     corner_window_px: float | None = None,
     min_cos: float = 0.25,
     noise_std: float | None = None,
@@ -205,7 +205,8 @@ def dynamic_stereo(
         Gradient stencil (:mod:`nfdepth.normal_flow`).
     min_gradient, max_corner_ratio, corner_window_px
         Edge-point rules (:func:`nfdepth.edges.select_edge_points`);
-        ``corner_window_px`` defaults to ``sigma_px``.
+        ``corner_window_px`` defaults to ``2 * sigma_px``: the
+        smoothing spreads a corner over about two sigma.
     min_cos : float
         Determinability threshold (:func:`nfdepth.depth.solve_inverse_depth`).
     noise_std : float, optional
@@ -243,7 +244,7 @@ def dynamic_stereo(
     edge_options = {
         "min_gradient": min_gradient,
         "max_corner_ratio": max_corner_ratio,
-        "corner_window_px": corner_window_px if corner_window_px is not None else max(sigma_px, 1.0),
+        "corner_window_px": corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0),
     }
     return _edge_result(
         camera=camera,
@@ -269,7 +270,7 @@ def static_stereo_edges(
     sigma_px: float = 2.0,
     stencil: str = "matched",
     min_gradient: float | None = None,
-    max_corner_ratio: float = 0.1,
+    max_corner_ratio: float = 0.05,
     corner_window_px: float | None = None,
     min_cos: float = 0.25,
     noise_std: float | None = None,
@@ -346,7 +347,7 @@ def static_stereo_edges(
     edge_options = {
         "min_gradient": min_gradient,
         "max_corner_ratio": max_corner_ratio,
-        "corner_window_px": corner_window_px if corner_window_px is not None else max(sigma_px, 1.0),
+        "corner_window_px": corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0),
     }
     return _edge_result(
         camera=camera,

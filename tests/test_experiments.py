@@ -1,0 +1,71 @@
+"""The paper's experiments reproduced (issue: Table 1, experiment 4, static).
+
+Targets: maximum relative error of the relative normal flow, corners
+excluded, at least as good as the paper in every column (ours must reach
+0.01 / 0.02 / 0.06 / 0.02 / 0.01), medians <= 0.5 %, and depth errors within
+10 % of the flow errors (depth error = flow error to first order, eq. 6).
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from nfdepth.experiments import EXPERIMENTS, PAPER_REPORTED, error_stats, run_paper_experiment
+
+TARGET_MAX = {"exp1": 0.01, "exp2": 0.02, "exp3": 0.06, "exp4": 0.02, "static": 0.01}
+
+
+@pytest.fixture(scope="module")
+def results():
+    return {name: run_paper_experiment(name) for name in EXPERIMENTS}
+
+
+@pytest.mark.parametrize("name", EXPERIMENTS)
+def test_noise_free_maxima_beat_the_paper(results, name):
+    s = results[name].summary()
+    flow, depth = s["flow_rel_error"], s["depth_rel_error"]
+    assert s["points"] >= 300  # the paper's figures show a few hundred edge points
+    assert flow["max"] <= TARGET_MAX[name] <= max(PAPER_REPORTED[name], TARGET_MAX[name])
+    assert flow["median"] <= 0.005
+    assert depth["max"] <= 1.1 * flow["max"] + 1e-4
+    assert depth["median"] <= 1.1 * flow["median"] + 1e-4
+
+
+def test_literal_stencil_is_worse_where_the_hint_says(results):
+    # The printed stencil (equal frame weights, two-point difference) cannot reach
+    # the paper's numbers for experiments 2-4 (measured 0.11 / 0.38 / 0.19).
+    literal = run_paper_experiment("exp3", stencil="paper").summary()["flow_rel_error"]["max"]
+    assert literal > 3 * results["exp3"].summary()["flow_rel_error"]["max"]
+
+
+def test_depth_points_are_on_the_pyramid(results):
+    r = results["exp1"]
+    z = r.result.depth[r.result.valid]
+    assert np.nanmin(z) > 195 and np.nanmax(z) < 405  # apex at 200, base at 400
+    pts = r.result.points[r.result.valid]
+    np.testing.assert_allclose(pts[:, 2], z)
+
+
+def test_noisy_experiment_is_seeded_and_reported(tmp_path):
+    a = run_paper_experiment("exp1", noise_std=1.0, seed=3).summary()
+    b = run_paper_experiment("exp1", noise_std=1.0, seed=3).summary()
+    assert a == {**b, "runtime_s": a["runtime_s"]}
+    # Noise of 1 grey level on edges of contrast 50: the per-point noise floor is
+    # about 1-2 % of the relative flow (see README); p95 measured 3.3-5 %.
+    assert a["flow_rel_error"]["median"] < 0.02
+    assert a["flow_rel_error"]["p95"] < 0.06
+    json.dumps(a)
+
+
+def test_error_stats_ignores_nan():
+    s = error_stats([np.nan, 0.1, 0.3, 0.2])
+    assert s["max"] == pytest.approx(0.3)
+    assert s["median"] == pytest.approx(0.2)
+    assert s["count"] == 3
+    assert np.isnan(error_stats([])["max"])
+
+
+def test_unknown_experiment():
+    with pytest.raises(ValueError, match="experiment must be one of"):
+        run_paper_experiment("exp9")
