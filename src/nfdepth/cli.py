@@ -180,6 +180,128 @@ def _cmd_demo(args) -> int:
     return EXIT_OK
 
 
+# -------------------------------------------------------------------- stereo
+
+_ARRAY_EXTS = (".pfm", ".tif", ".tiff", ".npy")
+
+
+def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--out") -> Path:
+    """Validate an output path before any work is done (no partial results)."""
+    out = Path(path)
+    if exts and out.suffix.lower() not in exts:
+        raise CLIError(f"{what} '{out}' must end in one of {', '.join(exts)}", EXIT_USAGE)
+    if out.is_dir():
+        raise CLIError(f"{what} '{out}' is a directory; expected a file path", EXIT_WRITE)
+    if out.exists() and not force:
+        raise CLIError(f"{what} '{out}' exists; use --force to overwrite it", EXIT_WRITE)
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise CLIError(f"{what} '{out}': directory '{parent}' does not exist", EXIT_WRITE)
+    return out
+
+
+def _positive(name: str, value):
+    if value is None:
+        return None
+    if not np.isfinite(value) or value <= 0:
+        raise CLIError(f"{name} must be a positive number, got {value:g}")
+    return float(value)
+
+
+def _cmd_stereo(args) -> int:
+    from .io import depth_to_points, read_image, write_array, write_colormap_png, write_ply
+    from .stereo import static_stereo
+
+    if len(args.views) < 2:
+        raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
+    focal = _positive("--focal-px", args.focal_px)
+    baseline = _positive("--baseline", args.baseline)
+    if (focal is None) != (baseline is None):
+        raise CLIError("--focal-px and --baseline go together: give both for depth output, or neither for disparity")
+    if args.ply and focal is None:
+        raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
+    reference = len(args.views) // 2 if args.reference is None else args.reference
+    if not 0 <= reference < len(args.views):
+        raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
+    outputs = [_check_output(args.out, force=args.force)]
+    if args.uncertainty:
+        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty"))
+    if args.preview:
+        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview"))
+    if args.ply:
+        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply"))
+    if len({str(p.resolve()) for p in outputs}) != len(outputs):
+        raise CLIError("output paths must differ from each other")
+    views = [read_image(v) for v in args.views]
+    shapes = {v.shape for v in views}
+    if len(shapes) > 1:
+        listed = ", ".join(f"{Path(p).name} {v.shape[1]}x{v.shape[0]}" for p, v in zip(args.views, views))
+        raise CLIError(f"all views must have the same size, got {listed}")
+    options = {}
+    if args.sigma_px is not None:
+        options["sigma_px"] = args.sigma_px
+    if args.levels is not None:
+        options["levels"] = args.levels
+    result = static_stereo(
+        views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
+    )
+    values = result.disparity
+    std = result.uncertainty
+    unit = "px"
+    if focal is not None:
+        values = result.depth(focal_px=focal, baseline=baseline)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            std = values**2 / (focal * baseline) * result.uncertainty
+        std = np.where(np.isfinite(values), std, np.nan)
+        unit = "scene units"
+    write_array(outputs[0], values.astype(np.float32), force=args.force)
+    k = 1
+    if args.uncertainty:
+        write_array(outputs[k], std.astype(np.float32), force=args.force)
+        k += 1
+    if args.preview:
+        write_colormap_png(outputs[k], values, force=args.force)
+        k += 1
+    if args.ply:
+        cam_ref = read_image(args.views[reference], grey=False, dtype=None)
+        pts, cols = depth_to_points(values, focal_px=focal, image=cam_ref)
+        write_ply(outputs[k], pts, colors=cols, force=args.force)
+    valid = np.isfinite(values)
+    kind = "depth" if focal is not None else "disparity"
+    finite = values[valid]
+    rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} {unit}" if finite.size else "none"
+    print(
+        f"{kind} for view {reference} ({Path(args.views[reference]).name}): {int(valid.sum())} of {valid.size} pixels"
+        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels -> {outputs[0]}"
+    )
+    return EXIT_OK
+
+
+def _cmd_view(args) -> int:
+    from .io import read_image, write_colormap_png
+    from . import plot
+
+    out = _check_output(args.out or str(Path(args.file).with_suffix(".png")), force=args.force, exts=(".png",))
+    data = read_image(args.file, dtype=np.float64)
+    if args.colorbar:
+        fig = plot.colormap_panel(data, title=Path(args.file).name, unit=args.unit, vmin=args.vmin, vmax=args.vmax)
+        if out.exists() and not args.force:
+            raise CLIError(f"'{out}' exists; use --force to overwrite it", EXIT_WRITE)
+        plot.save_figure(fig, out)
+    else:
+        write_colormap_png(out, data, vmin=args.vmin, vmax=args.vmax, force=args.force)
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
+def _cmd_bench(args) -> int:
+    from .bench import bench_main
+
+    if args.json:
+        _check_output(args.json, force=True, exts=(".json",), what="--json")
+    return int(bench_main(json_path=args.json, quick=args.quick))
+
+
 # ---------------------------------------------------------------- the parser
 
 
@@ -205,6 +327,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--only", nargs="+", choices=("exp1", "exp2", "exp3", "exp4", "static"), help="run only these")
     p.add_argument("--no-compare", action="store_true", help="skip the literal-stencil comparison column")
     p.set_defaults(func=_cmd_reproduce)
+
+    p = sub.add_parser("stereo", help="depth/disparity from a row of static views (coarse-to-fine, multi-view)")
+    p.add_argument("views", nargs="+", metavar="VIEW", help="image files, ordered so the camera moves toward +X (or +Y) first to last")
+    p.add_argument("--reference", type=int, default=None, metavar="K", help="0-based index of the view to compute (default: the middle one)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output .pfm, .tif or .npy (NaN where unknown)")
+    p.add_argument("--positions", type=float, nargs="+", metavar="P", help="camera positions in units of the baseline (default 0 1 2 ...)")
+    p.add_argument("--axis", choices=("x", "y"), default="x", help="direction of the row (default x)")
+    p.add_argument("--focal-px", type=float, metavar="F", help="focal length in pixels (with --baseline: output depth)")
+    p.add_argument("--baseline", type=float, metavar="B", help="distance between neighbouring views (scene units)")
+    p.add_argument("--edges-only", action="store_true", help="the paper's sparse output: edge points only")
+    p.add_argument("--uncertainty", metavar="FILE", help="also write the per-pixel standard deviation here")
+    p.add_argument("--preview", metavar="PNG", help="also write a colour-mapped PNG")
+    p.add_argument("--ply", metavar="FILE", help="also write a coloured point cloud (needs --focal-px, --baseline)")
+    p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
+    p.add_argument("--levels", type=int, help="pyramid levels (default: from the image size)")
+    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.set_defaults(func=_cmd_stereo)
+
+    p = sub.add_parser("view", help="turn a .pfm/.tif/.npy map (or any image) into a colour PNG")
+    p.add_argument("file", help="the map to show")
+    p.add_argument("--out", metavar="PNG", help="output PNG (default: FILE with .png)")
+    p.add_argument("--vmin", type=float)
+    p.add_argument("--vmax", type=float)
+    p.add_argument("--colorbar", action="store_true", help="draw a figure with a colour bar")
+    p.add_argument("--unit", default="px", help="colour-bar label (default px)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
+    p.set_defaults(func=_cmd_view)
+
+    p = sub.add_parser("bench", help="benchmarks against OpenCV (SGBM, BM, DIS) and the memory floor")
+    p.add_argument("--json", metavar="FILE", help="write the records as JSON")
+    p.add_argument("--quick", action="store_true", help="small sizes, fewer repeats (< 1 min)")
+    p.set_defaults(func=_cmd_bench)
     return parser
 
 

@@ -1,0 +1,653 @@
+"""Image and array I/O at the edge of the library.
+
+Reading
+    :func:`read_image` reads PNG, PPM/PGM (binary P5/P6, 8 or 16 bit), TIFF,
+    JPEG, PFM and NPY files and returns a float array. Colour is converted to
+    grey once, here, with :func:`to_grey` (ITU-R BT.601 luma on the stored
+    values). Intensities stay in their stored unit: 0..255 for 8-bit files,
+    0..65535 for 16-bit files, as stored for float files.
+
+Writing
+    Every writer goes through :func:`atomic_write`: the data are written to a
+    temporary file in the target's directory and moved into place with
+    :func:`os.replace`, so a reader never sees a half-written file. An existing
+    target is kept unless ``force=True`` (:class:`OutputExistsError`).
+
+    * :func:`write_array` -- a 2-D float map (depth, disparity), ``.pfm``,
+      ``.tif``/``.tiff`` (float32) or ``.npy``; NaN marks unknown values.
+    * :func:`write_pfm` / :func:`read_pfm` -- Middlebury PFM.
+    * :func:`write_colormap_png` -- a quick-look false-colour PNG.
+    * :func:`write_ply` and :func:`depth_to_points` -- point clouds.
+
+All errors are ``ValueError`` subclasses (:class:`ImageReadError`,
+:class:`OutputExistsError`, :class:`OutputWriteError`) or ``TypeError``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import BinaryIO
+
+import cv2
+import numpy as np
+
+from ._validate import NFDepthError, check_positive_finite, float_dtype
+
+__all__ = [
+    "ImageReadError",
+    "OutputExistsError",
+    "OutputWriteError",
+    "READ_EXTENSIONS",
+    "ARRAY_EXTENSIONS",
+    "LUMA_WEIGHTS",
+    "read_image",
+    "to_grey",
+    "read_pfm",
+    "write_pfm",
+    "write_array",
+    "atomic_write",
+    "write_colormap_png",
+    "write_ply",
+    "depth_to_points",
+]
+
+#: ITU-R BT.601 luma weights for (R, G, B).
+LUMA_WEIGHTS = (0.299, 0.587, 0.114)
+
+_CV2_EXTENSIONS = (".png", ".ppm", ".pgm", ".pnm", ".pbm", ".jpg", ".jpeg", ".bmp")
+_TIFF_EXTENSIONS = (".tif", ".tiff")
+#: File extensions :func:`read_image` understands (lower case).
+READ_EXTENSIONS = _CV2_EXTENSIONS + _TIFF_EXTENSIONS + (".pfm", ".npy")
+#: File extensions :func:`write_array` understands (lower case).
+ARRAY_EXTENSIONS = (".pfm", ".tif", ".tiff", ".npy")
+
+
+class ImageReadError(NFDepthError):
+    """An image file could not be read (missing, a directory, unsupported, broken)."""
+
+
+class OutputExistsError(NFDepthError):
+    """The output file exists and ``force`` was not given."""
+
+
+class OutputWriteError(NFDepthError):
+    """The output file could not be written (missing or unwritable directory, ...)."""
+
+
+def _read_error(path, reason: str) -> ImageReadError:
+    return ImageReadError(f"cannot read image '{path}': {reason}")
+
+
+# ------------------------------------------------------------------ reading
+
+
+def to_grey(array, *, dtype=None) -> np.ndarray:
+    """Convert an RGB(A) image to grey with the ITU-R BT.601 luma weights.
+
+    Parameters
+    ----------
+    array : array_like, shape (H, W), (H, W, 1), (H, W, 2), (H, W, 3) or (H, W, 4)
+        A grey image (returned as float, unchanged in value), grey + alpha,
+        RGB or RGBA, channels in **R, G, B** order. Alpha is dropped.
+    dtype : numpy dtype or None, keyword-only
+        ``float32`` or ``float64`` for the result (and the arithmetic); by
+        default float64 for float64 input, else float32.
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+        ``0.299 R + 0.587 G + 0.114 B`` on the stored values (no gamma
+        handling, no rescaling).
+
+    Raises
+    ------
+    TypeError
+        If ``array`` is not real numeric.
+    ValueError
+        If its shape is not one of the above.
+    """
+    arr = np.asarray(array)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+        msg = f"array must be a real numeric image, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    if dtype is not None:
+        out_dtype = float_dtype(dtype)
+    else:
+        out_dtype = np.float64 if arr.dtype == np.float64 else np.float32
+    if arr.ndim == 2:
+        return arr.astype(out_dtype, copy=False)
+    if arr.ndim != 3 or arr.shape[-1] not in (1, 2, 3, 4):
+        msg = f"array must have shape (H, W) or (H, W, C) with C in 1..4, got shape {arr.shape}"
+        raise ValueError(msg)
+    if arr.shape[-1] <= 2:  # grey, grey + alpha
+        return arr[..., 0].astype(out_dtype)
+    rgb = arr[..., :3].astype(out_dtype, copy=False)
+    r, g, b = LUMA_WEIGHTS
+    return (r * rgb[..., 0] + g * rgb[..., 1] + b * rgb[..., 2]).astype(out_dtype, copy=False)
+
+
+def read_pfm(path) -> np.ndarray:
+    """Read a PFM file (Middlebury / Debevec portable float map).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file. ``Pf`` (grey) and ``PF`` (RGB) are understood, both byte
+        orders (negative scale = little-endian).
+
+    Returns
+    -------
+    ndarray, float32, shape (H, W) or (H, W, 3)
+        Row 0 is the **top** row (PFM stores rows bottom to top; this is
+        undone here). NaN and inf are preserved.
+
+    Raises
+    ------
+    ImageReadError
+        If the file is missing, a directory, not PFM, or truncated.
+    """
+    path = Path(path)
+    data = _read_bytes(path)
+    return _decode_pfm(path, data)
+
+
+_PFM_HEADER = re.compile(rb"\A(P[Ff])\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s")
+
+
+def _decode_pfm(path, data: bytes) -> np.ndarray:
+    m = _PFM_HEADER.match(data)
+    if m is None:
+        raise _read_error(path, "not a PFM file (expected a 'Pf' or 'PF' header, width, height and scale)")
+    channels = 3 if m.group(1) == b"PF" else 1
+    width, height = int(m.group(2)), int(m.group(3))
+    try:
+        scale = float(m.group(4))
+    except ValueError:
+        raise _read_error(path, f"bad PFM scale {m.group(4)!r}") from None
+    if scale == 0 or width == 0 or height == 0:
+        raise _read_error(path, f"bad PFM header (width {width}, height {height}, scale {scale})")
+    dtype = np.dtype("<f4") if scale < 0 else np.dtype(">f4")
+    count = width * height * channels
+    body = data[m.end() :]
+    if len(body) < count * 4:
+        raise _read_error(path, f"truncated PFM: expected {count * 4} bytes of pixel data, found {len(body)}")
+    arr = np.frombuffer(body, dtype=dtype, count=count).astype(np.float32)
+    shape = (height, width) if channels == 1 else (height, width, 3)
+    return np.ascontiguousarray(arr.reshape(shape)[::-1])
+
+
+def _read_bytes(path: Path) -> bytes:
+    if not path.exists():
+        raise _read_error(path, "no such file")
+    if path.is_dir():
+        raise _read_error(path, "it is a directory, not a file")
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise _read_error(path, exc.strerror or str(exc)) from None
+    if not data:
+        raise _read_error(path, "the file is empty")
+    return data
+
+
+def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
+    if ext in (".jpg", ".jpeg") and not data.rstrip(b"\0").endswith(b"\xff\xd9"):
+        raise _read_error(path, "truncated JPEG (no end-of-image marker)")
+    previous = None
+    try:  # keep OpenCV's own log quiet; the error below says what went wrong
+        previous = cv2.setLogLevel(0)
+    except Exception:  # pragma: no cover - old OpenCV without setLogLevel
+        previous = None
+    try:
+        arr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    except cv2.error as exc:  # pragma: no cover - imdecode usually returns None
+        raise _read_error(path, f"OpenCV could not decode it ({exc})") from None
+    finally:
+        if previous is not None:
+            cv2.setLogLevel(previous)
+    if arr is None:
+        raise _read_error(path, f"OpenCV could not decode it as {ext[1:].upper()} (broken or truncated file?)")
+    if arr.ndim == 3 and arr.shape[-1] == 3:
+        arr = arr[..., ::-1]  # BGR -> RGB
+    elif arr.ndim == 3 and arr.shape[-1] == 4:
+        arr = arr[..., [2, 1, 0, 3]]  # BGRA -> RGBA
+    return np.ascontiguousarray(arr)
+
+
+def _decode_tiff(path: Path) -> np.ndarray:
+    import tifffile
+
+    try:
+        arr = tifffile.imread(path)
+    except Exception as exc:  # tifffile raises several types on broken files
+        raise _read_error(path, f"not a readable TIFF ({type(exc).__name__}: {exc})") from None
+    arr = np.asarray(arr)
+    if arr.ndim == 3 and arr.shape[0] in (3, 4) and arr.shape[-1] not in (1, 2, 3, 4):
+        arr = np.moveaxis(arr, 0, -1)  # planar (C, H, W) -> (H, W, C)
+    return arr
+
+
+def _decode_npy(path: Path) -> np.ndarray:
+    try:
+        return np.load(path, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise _read_error(path, f"not a readable NPY file ({exc})") from None
+
+
+def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
+    """Read an image file into an array.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        PNG, PPM/PGM/PNM (binary P5/P6, 8 or 16 bit), BMP, JPEG, TIFF, PFM
+        or NPY, chosen by the extension (case-insensitive).
+    grey : bool, keyword-only
+        Convert colour to grey with :func:`to_grey` (BT.601 luma, alpha
+        dropped). With ``False`` colour comes back as (H, W, 3) or (H, W, 4)
+        in **R, G, B(, A)** order (OpenCV's BGR is undone).
+    dtype : numpy dtype or None, keyword-only
+        ``float32`` (default) or ``float64``; ``None`` keeps the stored
+        dtype (e.g. ``uint8`` for an 8-bit PNG) and, with ``grey=False``, the
+        stored values exactly.
+
+    Returns
+    -------
+    ndarray
+        (H, W) when ``grey``; else (H, W) or (H, W, C). Intensities are in
+        their stored unit: 0..255 for 8-bit, 0..65535 for 16-bit files.
+
+    Raises
+    ------
+    ImageReadError
+        "cannot read image 'PATH': reason" for a missing file, a directory,
+        an empty, broken or truncated file, or an unsupported extension.
+    ValueError
+        If ``dtype`` is not float32, float64 or None.
+
+    Notes
+    -----
+    JPEG EXIF orientation is ignored (pixels as stored).
+    """
+    out_dtype = None if dtype is None else float_dtype(dtype)
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in READ_EXTENSIONS:
+        if not path.exists():
+            raise _read_error(path, "no such file")
+        listed = ", ".join(READ_EXTENSIONS)
+        raise _read_error(path, f"unsupported extension {path.suffix!r}; expected one of {listed}")
+    if ext in _TIFF_EXTENSIONS or ext == ".npy":
+        _check_is_file(path)
+        arr = _decode_tiff(path) if ext in _TIFF_EXTENSIONS else _decode_npy(path)
+    else:
+        data = _read_bytes(path)
+        arr = _decode_pfm(path, data) if ext == ".pfm" else _decode_cv2(path, data, ext)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+        raise _read_error(path, f"holds dtype {arr.dtype}, expected real numbers")
+    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] in (1, 2, 3, 4))):
+        raise _read_error(path, f"holds an array of shape {arr.shape}, expected (H, W) or (H, W, C) with C in 1..4")
+    if arr.dtype == bool:
+        arr = arr.astype(np.uint8)
+    if arr.ndim == 3 and arr.shape[-1] == 1:
+        arr = arr[..., 0]
+    if grey and arr.ndim == 3:
+        arr = to_grey(arr, dtype=out_dtype)
+    if out_dtype is not None:
+        arr = arr.astype(out_dtype, copy=False)
+    return arr
+
+
+def _check_is_file(path: Path) -> None:
+    if not path.exists():
+        raise _read_error(path, "no such file")
+    if path.is_dir():
+        raise _read_error(path, "it is a directory, not a file")
+    if path.stat().st_size == 0:
+        raise _read_error(path, "the file is empty")
+
+
+# ------------------------------------------------------------------ writing
+
+
+def _current_umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool = False) -> Path:
+    """Write a file atomically through ``writer_fn``.
+
+    ``writer_fn`` receives a binary file object open for writing on a
+    temporary file in the target's directory; when it returns, the file is
+    flushed, synced and moved onto ``path`` with :func:`os.replace`. If
+    ``writer_fn`` raises, the temporary file is removed and the target is
+    untouched.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The target file. Its directory must exist.
+    writer_fn : callable
+        ``writer_fn(fh)`` writes the whole content to ``fh``.
+    force : bool, keyword-only
+        Replace an existing target. Without it an existing target raises
+        :class:`OutputExistsError` (checked race-free with a hard link where
+        the file system supports it).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    OutputExistsError
+        If ``path`` exists and ``force`` is false.
+    OutputWriteError
+        If the directory is missing or not writable, ``path`` is a directory,
+        or the write fails.
+    """
+    if not callable(writer_fn):
+        msg = f"writer_fn must be callable, got {type(writer_fn).__name__}"
+        raise TypeError(msg)
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise OutputWriteError(f"cannot write '{path}': it is a directory")
+    if not parent.is_dir():
+        raise OutputWriteError(f"cannot write '{path}': directory '{parent}' does not exist")
+    if path.exists() and not force:
+        raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it")
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc} (directory '{parent}')") from None
+    tmp = Path(tmp_name)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            writer_fn(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_current_umask())
+        if force:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)  # fails if the target appeared meanwhile
+            except FileExistsError:
+                raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it") from None
+            except OSError:  # no hard links on this file system
+                if path.exists():
+                    raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it") from None
+                os.replace(tmp, path)
+    except OSError as exc:
+        raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc}") from None
+    finally:
+        try:
+            tmp.unlink()
+        except FileNotFoundError:
+            pass
+        except OSError:  # pragma: no cover
+            pass
+    return path
+
+
+def _as_map(name: str, array, *, allow_colour: bool = False) -> np.ndarray:
+    arr = np.asarray(array)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+        msg = f"{name} must be a real numeric array, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    ok = arr.ndim == 2 or (allow_colour and arr.ndim == 3 and arr.shape[-1] == 3)
+    if not ok or arr.size == 0:
+        expected = "(H, W) or (H, W, 3)" if allow_colour else "(H, W)"
+        msg = f"{name} must be a non-empty array of shape {expected}, got shape {arr.shape}"
+        raise ValueError(msg)
+    return arr
+
+
+def _pfm_bytes(arr: np.ndarray) -> bytes:
+    tag = b"PF" if arr.ndim == 3 else b"Pf"
+    h, w = arr.shape[:2]
+    header = tag + b"\n" + f"{w} {h}\n-1.0\n".encode("ascii")
+    body = np.ascontiguousarray(arr[::-1], dtype="<f4").tobytes()
+    return header + body
+
+
+def write_pfm(path, array, *, force: bool = False) -> Path:
+    """Write a PFM file (Middlebury convention), atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file.
+    array : array_like, shape (H, W) or (H, W, 3)
+        Stored as little-endian float32 (header ``Pf`` or ``PF``, scale
+        -1.0), rows bottom to top as PFM requires; NaN and inf are kept.
+    force : bool, keyword-only
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    arr = _as_map("array", array, allow_colour=True)
+    payload = _pfm_bytes(arr)
+    return atomic_write(path, lambda fh: fh.write(payload), force=force)
+
+
+def write_array(path, array, *, force: bool = False) -> Path:
+    """Write a 2-D float map (depth, disparity, ...) by extension, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.pfm`` (float32, Middlebury PFM), ``.tif``/``.tiff`` (float32
+        TIFF) or ``.npy`` (float32 unless the array is float64, which is
+        kept).
+    array : array_like, shape (H, W)
+        The map; NaN marks unknown values and is stored as NaN.
+    force : bool, keyword-only
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        For an unsupported extension or a non-2-D array.
+    OutputExistsError, OutputWriteError
+        See :func:`atomic_write`.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in ARRAY_EXTENSIONS:
+        msg = f"path must end in one of {', '.join(ARRAY_EXTENSIONS)}, got {str(path)!r}"
+        raise ValueError(msg)
+    arr = _as_map("array", array)
+    if ext == ".pfm":
+        payload = _pfm_bytes(arr)
+        return atomic_write(path, lambda fh: fh.write(payload), force=force)
+    if ext == ".npy":
+        out = arr if arr.dtype == np.float64 else arr.astype(np.float32)
+        return atomic_write(path, lambda fh: np.save(fh, out, allow_pickle=False), force=force)
+    import tifffile
+
+    import io as _io
+
+    buf = _io.BytesIO()  # tifffile wants a named file or a buffer, not an os.fdopen object
+    tifffile.imwrite(buf, np.ascontiguousarray(arr, dtype=np.float32))
+    payload = buf.getvalue()
+    return atomic_write(path, lambda fh: fh.write(payload), force=force)
+
+
+def _encode_png(rgb: np.ndarray) -> bytes:
+    ok, buf = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]))
+    if not ok:  # pragma: no cover
+        raise OutputWriteError("OpenCV could not encode the PNG")
+    return buf.tobytes()
+
+
+def write_colormap_png(path, array, *, vmin=None, vmax=None, cmap: str = "turbo", force: bool = False) -> Path:
+    """Write a false-colour quick-look PNG of a 2-D map, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target ``.png`` file.
+    array : array_like, shape (H, W)
+        The map. NaN and +-inf are drawn black.
+    vmin, vmax : float, optional, keyword-only
+        Values mapped to the ends of the colour map; default the finite
+        minimum and maximum. Values outside are clipped.
+    cmap : str, keyword-only
+        A Matplotlib colour map name (``matplotlib.colormaps``).
+    force : bool, keyword-only
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    from matplotlib import colormaps
+
+    arr = _as_map("array", array).astype(np.float64)
+    if cmap not in colormaps:
+        msg = f"cmap must be a Matplotlib colour map name such as 'turbo', 'viridis' or 'gray', got {cmap!r}"
+        raise ValueError(msg)
+    finite = np.isfinite(arr)
+    lo = vmin if vmin is not None else (float(arr[finite].min()) if finite.any() else 0.0)
+    hi = vmax if vmax is not None else (float(arr[finite].max()) if finite.any() else 1.0)
+    for name, v in (("vmin", lo), ("vmax", hi)):
+        if not np.isfinite(float(v)):
+            msg = f"{name} must be a finite number, got {v!r}"
+            raise ValueError(msg)
+    lo, hi = float(lo), float(hi)
+    if hi < lo:
+        msg = f"vmax must be >= vmin, got vmin={lo!r}, vmax={hi!r}"
+        raise ValueError(msg)
+    with np.errstate(invalid="ignore"):
+        norm = np.full(arr.shape, 0.5) if hi == lo else np.clip((arr - lo) / (hi - lo), 0.0, 1.0)
+    norm[~finite] = 0.0
+    rgb = colormaps[cmap](norm, bytes=True)[..., :3].copy()
+    rgb[~finite] = 0
+    payload = _encode_png(rgb)
+    return atomic_write(path, lambda fh: fh.write(payload), force=force)
+
+
+def write_ply(path, points_xyz, *, colors=None, force: bool = False) -> Path:
+    """Write a point cloud as binary little-endian PLY, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target ``.ply`` file.
+    points_xyz : array_like, shape (N, 3)
+        Point coordinates, stored as float32 ``x, y, z``. Rows with any
+        non-finite coordinate are skipped.
+    colors : array_like, shape (N, 3), optional, keyword-only
+        Integer RGB in 0..255, stored as uchar ``red, green, blue``.
+    force : bool, keyword-only
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    pts = np.asarray(points_xyz)
+    if pts.dtype == object or not np.issubdtype(pts.dtype, np.number) or np.iscomplexobj(pts):
+        msg = f"points_xyz must be a real numeric array, got dtype {pts.dtype}"
+        raise TypeError(msg)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        msg = f"points_xyz must have shape (N, 3), got shape {pts.shape}"
+        raise ValueError(msg)
+    keep = np.all(np.isfinite(pts), axis=1)
+    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
+    col = None
+    if colors is not None:
+        col = np.asarray(colors)
+        if col.shape != pts.shape:
+            msg = f"colors must have shape {pts.shape} like points_xyz, got shape {col.shape}"
+            raise ValueError(msg)
+        if not np.issubdtype(col.dtype, np.integer):
+            msg = f"colors must be integers 0..255 (uint8), got dtype {col.dtype}"
+            raise TypeError(msg)
+        if col.size and (col.min() < 0 or col.max() > 255):
+            msg = f"colors must lie in 0..255, got range {col.min()}..{col.max()}"
+            raise ValueError(msg)
+        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    n = int(keep.sum())
+    rec = np.empty(n, dtype=np.dtype(fields))
+    rec["x"], rec["y"], rec["z"] = (pts[keep, i] for i in range(3))
+    if col is not None:
+        rec["red"], rec["green"], rec["blue"] = (col[keep, i] for i in range(3))
+    lines = ["ply", "format binary_little_endian 1.0", "comment written by nfdepth", f"element vertex {n}"]
+    lines += ["property float x", "property float y", "property float z"]
+    if col is not None:
+        lines += ["property uchar red", "property uchar green", "property uchar blue"]
+    lines.append("end_header")
+    payload = ("\n".join(lines) + "\n").encode("ascii") + rec.tobytes()
+    return atomic_write(path, lambda fh: fh.write(payload), force=force)
+
+
+def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
+    """Back-project a depth map to 3-D points in the camera frame.
+
+    ``X = (col - cx) Z / f``, ``Y = (row - cy) Z / f`` (X right, Y down, Z
+    forward; see CONVENTIONS.md).
+
+    Parameters
+    ----------
+    depth : array_like, shape (H, W)
+        Depth Z (any length unit; the points come out in the same unit).
+        Pixels that are not finite or not > 0 are skipped.
+    focal_px : float, keyword-only
+        Focal length in pixels.
+    cx_px, cy_px : float, optional, keyword-only
+        Principal point in pixels; default the image centre ``(W-1)/2``,
+        ``(H-1)/2``.
+    image : array_like, shape (H, W) or (H, W, 3), optional, keyword-only
+        Colour (RGB) or grey image for point colours; float values are
+        rounded and clipped to 0..255.
+
+    Returns
+    -------
+    points : ndarray, float32, shape (N, 3)
+        One row per kept pixel, in row-major pixel order.
+    colors : ndarray, uint8, shape (N, 3), or None
+        RGB per point when ``image`` is given.
+    """
+    z = _as_map("depth", depth).astype(np.float64)
+    f = check_positive_finite("focal_px", focal_px)
+    h, w = z.shape
+    cx = (w - 1) / 2.0 if cx_px is None else float(cx_px)
+    cy = (h - 1) / 2.0 if cy_px is None else float(cy_px)
+    for name, v in (("cx_px", cx), ("cy_px", cy)):
+        if not np.isfinite(v):
+            msg = f"{name} must be a finite number, got {v!r}"
+            raise ValueError(msg)
+    with np.errstate(invalid="ignore"):
+        keep = np.isfinite(z) & (z > 0)
+    rows, cols = np.nonzero(keep)
+    zz = z[rows, cols]
+    pts = np.stack([(cols - cx) * zz / f, (rows - cy) * zz / f, zz], axis=1).astype(np.float32)
+    colors = None
+    if image is not None:
+        img = np.asarray(image)
+        if img.shape[:2] != z.shape or not (img.ndim == 2 or (img.ndim == 3 and img.shape[-1] in (3, 4))):
+            msg = f"image must have shape {z.shape} or {z.shape + (3,)} like depth, got shape {img.shape}"
+            raise ValueError(msg)
+        if img.ndim == 2:
+            img = np.repeat(img[..., None], 3, axis=2)
+        img = img[..., :3]
+        if img.dtype != np.uint8:
+            img = np.clip(np.rint(np.nan_to_num(img.astype(np.float64))), 0, 255).astype(np.uint8)
+        colors = np.ascontiguousarray(img[rows, cols])
+    return pts, colors

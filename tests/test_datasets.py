@@ -1,0 +1,232 @@
+"""Tests of nfdepth.datasets against the real data (marked ``data``) and its error paths."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import cv2
+import numpy as np
+import pytest
+
+from nfdepth import datasets as D
+from nfdepth.datasets import DataNotFoundError, MultiViewScene
+
+
+@pytest.fixture(scope="module")
+def root():
+    try:
+        return D.data_root()
+    except DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
+
+
+def _warp_errors(scene: MultiViewScene, k: int):
+    """Mean |grey| error of view ref+k warped onto the reference by k*d, and unwarped."""
+    ref = scene.reference
+    view = scene.views[scene.reference_index + k]
+    d = scene.disparity
+    h, w = ref.shape
+    rows, cols = np.mgrid[0:h, 0:w].astype(np.float32)
+    map_x = (cols - k * np.nan_to_num(d)).astype(np.float32)
+    warped = cv2.remap(view, map_x, rows, cv2.INTER_LINEAR)
+    m = np.isfinite(d) & (map_x >= 0) & (map_x <= w - 1)
+    return float(np.abs(warped - ref)[m].mean()), float(np.abs(view - ref)[m].mean())
+
+
+# (loader, n views, ref index, shape, disparity min, max, NaN % range, {k: max warped error})
+CASES = {
+    "tsukuba": (5, 2, (288, 384), 5.0, 14.0, (20.5, 20.9), {-1: 4.0, 1: 4.6, 2: 7.7}),
+    "teddy": (9, 2, (375, 450), 3.125, 13.1875, (1.9, 2.1), {1: 4.0, 2: 4.4, -1: 6.6}),
+    "middlebury2005/Art": (7, 1, (555, 695), 9.125, 28.0, (0.1, 0.9), {1: 4.4, 2: 6.8}),
+    "middlebury2005/Books": (7, 1, (555, 695), 1.125, 27.625, (0.1, 0.9), {1: 4.4}),
+    "middlebury2005/Dolls": (7, 1, (555, 695), 1.125, 27.625, (0.1, 0.9), {1: 4.4}),
+    "middlebury2005/Moebius": (7, 1, (555, 695), 8.0, 27.25, (0.1, 0.9), {1: 4.4}),
+    "middlebury2005/Reindeer": (7, 1, (555, 671), 1.375, 25.125, (0.1, 0.9), {1: 4.4}),
+    "motorcycle": (2, 0, (500, 741), 7.19, 59.91, (7.2, 7.4), {1: 7.6}),
+}
+
+
+@pytest.fixture(scope="module")
+def scenes(root):
+    return {}
+
+
+def _load(scenes, name):
+    if name not in scenes:
+        scenes[name] = D.load_scene(name)
+    return scenes[name]
+
+
+@pytest.mark.data
+def test_list_scenes(root):
+    assert D.list_scenes() == list(CASES)
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("name", list(CASES))
+def test_scene_matches_source(scenes, name):
+    n, ref, shape, dlo, dhi, nan_pct, warp = CASES[name]
+    sc = _load(scenes, name)
+    assert sc.name == name and len(sc.views) == n and sc.reference_index == ref
+    assert all(v.shape == shape and v.dtype == np.float32 for v in sc.views)
+    assert sc.disparity.shape == shape and sc.disparity.dtype == np.float32
+    assert sc.colour_reference.shape == (*shape, 3) and sc.colour_reference.dtype == np.uint8
+    assert 0 <= min(float(v.min()) for v in sc.views) and max(float(v.max()) for v in sc.views) <= 255
+    d = sc.disparity
+    assert np.nanmin(d) == pytest.approx(dlo, abs=0.01) and np.nanmax(d) == pytest.approx(dhi, abs=0.01)
+    assert nan_pct[0] <= 100 * np.isnan(d).mean() <= nan_pct[1]
+    for k, limit in warp.items():
+        warped, unwarped = _warp_errors(sc, k)
+        assert warped <= limit, (k, warped)
+        assert unwarped > 3 * warped, (k, warped, unwarped)
+    assert sc.source
+
+
+@pytest.mark.data
+def test_warp_sign_and_scale(scenes):
+    """The stated scale and sign are the right ones: 1.5x or the opposite sign is much worse."""
+    sc = _load(scenes, "tsukuba")
+    good = _warp_errors(sc, 1)[0]
+    for factor in (1.5, -1.0, 0.5):
+        wrong = dataclasses.replace(sc, disparity=sc.disparity * np.float32(factor))
+        assert _warp_errors(wrong, 1)[0] > 3 * good
+
+
+@pytest.mark.data
+def test_tsukuba_integer_layers(scenes):
+    d = _load(scenes, "tsukuba").disparity
+    assert set(np.unique(d[np.isfinite(d)]).tolist()) == {5.0, 6.0, 7.0, 8.0, 10.0, 11.0, 14.0}
+
+
+@pytest.mark.data
+@pytest.mark.parametrize(
+    ("name", "zlo", "zhi"),
+    [("middlebury2005/Art", 1410, 2190), ("middlebury2005/Reindeer", 1390, 2480), ("motorcycle", 2110, 5020)],
+)
+def test_metric_depth(scenes, name, zlo, zhi):
+    sc = _load(scenes, name)
+    z = sc.depth()
+    assert sc.baseline_unit == "mm" and z.dtype == np.float32
+    assert np.nanmin(z) == pytest.approx(zlo, abs=10) and np.nanmax(z) == pytest.approx(zhi, abs=10)
+    np.testing.assert_array_equal(np.isnan(z), np.isnan(sc.disparity))
+
+
+@pytest.mark.data
+def test_offsets(scenes):
+    assert _load(scenes, "middlebury2005/Art").disparity_offset_px == 25.0
+    assert _load(scenes, "middlebury2005/Reindeer").disparity_offset_px == pytest.approx(230 / 8)
+    mc = _load(scenes, "motorcycle")
+    assert (mc.focal_px, mc.baseline, mc.disparity_offset_px) == (994.978, 193.001, 31.086)
+    assert mc.principal_point_px == (311.193, 254.877)
+
+
+@pytest.mark.data
+def test_depth_unknown_scale_raises(scenes):
+    with pytest.raises(ValueError, match="no published focal length and baseline"):
+        _load(scenes, "teddy").depth()
+
+
+@pytest.mark.data
+def test_downsample_scene(scenes):
+    sc = _load(scenes, "middlebury2005/Art")
+    small = D.downsample_scene(sc, 4)
+    assert small.shape == (555 // 4, 695 // 4) and len(small.views) == 7
+    assert small.colour_reference.shape == (*small.shape, 3) and small.colour_reference.dtype == np.uint8
+    assert small.focal_px == 1870 / 4 and small.disparity_offset_px == 25 / 4 and small.baseline == 40
+    assert 6.5 < np.nanmax(small.disparity) <= 7.0  # 28 px / 4, block-averaged
+    # depth is preserved (up to block averaging of disparity)
+    z = sc.depth()[:552, :692].reshape(138, 4, 173, 4)
+    ok = np.isfinite(z).all(axis=(1, 3))
+    assert np.isfinite(small.disparity[ok]).all()
+    assert np.median(np.abs(small.depth()[ok] / z.mean(axis=(1, 3))[ok] - 1)) < 0.01
+    # the block mean of the views is exact area averaging
+    np.testing.assert_allclose(small.views[1][0, 0], sc.views[1][:4, :4].mean(), rtol=1e-5)
+    # warping still works at the smaller size
+    warped, unwarped = _warp_errors(small, 1)
+    assert warped < 5.5 and unwarped > 4 * warped  # 4.7 vs 24.7 (4.1 vs 26.2 at full size)
+    assert D.downsample_scene(sc, 1).disparity.shape == sc.disparity.shape
+    mc = D.downsample_scene(_load(scenes, "motorcycle"), 2)
+    assert mc.principal_point_px == pytest.approx(((311.193 + 0.5) / 2 - 0.5, (254.877 + 0.5) / 2 - 0.5))
+
+
+@pytest.mark.data
+def test_view_subset(scenes):
+    sc = _load(scenes, "teddy")
+    sub = D.view_subset(sc, [1, 2, 3])
+    assert len(sub.views) == 3 and sub.reference_index == 1 and sub.views[0] is sc.views[1]
+    np.testing.assert_array_equal(sub.disparity, sc.disparity)
+    wide = D.view_subset(sc, [0, 2, 4, 6])
+    assert wide.reference_index == 1
+    np.testing.assert_array_equal(wide.disparity, 2 * sc.disparity)
+    assert _warp_errors(wide, 1)[0] < 5  # im4 onto im2 with the doubled step
+    with pytest.raises(ValueError, match="must include the reference view 2"):
+        D.view_subset(sc, [3, 4])
+    with pytest.raises(ValueError, match="equally spaced"):
+        D.view_subset(sc, [1, 2, 4])
+    with pytest.raises(ValueError, match="lie in 0..8"):
+        D.view_subset(sc, [2, 9])
+    art = D.view_subset(_load(scenes, "middlebury2005/Art"), [1, 3, 5])
+    assert art.baseline == 80 and art.disparity_offset_px == 50
+    np.testing.assert_allclose(art.depth(), _load(scenes, "middlebury2005/Art").depth(), rtol=1e-5)
+
+
+# ------------------------------------------------------------------ no data needed
+
+
+def _synthetic_scene():
+    rng = np.random.default_rng(0)
+    views = [rng.random((8, 10)).astype(np.float32) for _ in range(3)]
+    disp = np.full((8, 10), 2.0, np.float32)
+    disp[0, 0] = np.nan  # one NaN in the first 2x2 block
+    disp[2:4, 2:4] = np.nan  # a whole block
+    disp[4, 4] = disp[4, 5] = disp[5, 4] = np.nan  # three of four
+    colour = np.zeros((8, 10, 3), np.uint8)
+    return MultiViewScene("syn", views, 1, disp, 100.0, 10.0, "mm", 0.0, colour, "synthetic")
+
+
+def test_downsample_nan_rule():
+    sc = _synthetic_scene()
+    small = D.downsample_scene(sc, 2)
+    assert small.disparity.shape == (4, 5)
+    assert small.disparity[0, 0] == 1.0  # 3 of 4 valid: mean / 2
+    assert np.isnan(small.disparity[1, 1]) and np.isnan(small.disparity[2, 2])
+    strict = D.downsample_scene(sc, 2, min_valid_fraction=1.0)
+    assert np.isnan(strict.disparity[0, 0]) and strict.disparity[0, 1] == 1.0
+    np.testing.assert_allclose(small.depth()[0, 1], sc.depth()[0, 2])
+    with pytest.raises(ValueError, match="factor must be a positive integer, got 0"):
+        D.downsample_scene(sc, 0)
+    with pytest.raises(ValueError, match="factor must be a positive integer, got 1.5"):
+        D.downsample_scene(sc, 1.5)
+    with pytest.raises(ValueError, match="factor=5 is too large"):
+        D.downsample_scene(sc, 5)
+
+
+def test_missing_root_mentions_env(tmp_path, monkeypatch):
+    monkeypatch.setenv("NFDEPTH_DATA", str(tmp_path / "nowhere"))
+    with pytest.raises(DataNotFoundError, match="NFDEPTH_DATA"):
+        D.data_root()
+    with pytest.raises(DataNotFoundError, match="NFDEPTH_DATA"):
+        D.load_tsukuba()
+    with pytest.raises(DataNotFoundError, match="NFDEPTH_DATA"):
+        D.data_root(tmp_path / "also-missing")
+    assert issubclass(DataNotFoundError, ValueError)
+
+
+def test_no_root_anywhere(tmp_path, monkeypatch):
+    monkeypatch.delenv("NFDEPTH_DATA", raising=False)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(D, "_repo_candidate", lambda: None)
+    with pytest.raises(DataNotFoundError, match=r"tried NFDEPTH_DATA \(not set\).*shared.data"):
+        D.data_root()
+
+
+def test_missing_file_is_named(tmp_path, monkeypatch):
+    (tmp_path / "tsukuba").mkdir()
+    monkeypatch.setenv("NFDEPTH_DATA", str(tmp_path))
+    with pytest.raises(DataNotFoundError, match=r"data file missing: '.*scene1\.row3\.col1\.ppm'"):
+        D.load_scene("tsukuba")
+    assert D.list_scenes() == []
+    with pytest.raises(ValueError, match="name must be one of tsukuba, teddy"):
+        D.load_scene("nope")
+    with pytest.raises(ValueError, match="scene must be one of Art, Books"):
+        D.load_middlebury2005("Laundry")

@@ -1,0 +1,388 @@
+"""Tests of nfdepth.io: readers, writers, atomic writes, errors."""
+
+from __future__ import annotations
+
+import os
+import re
+
+import cv2
+import numpy as np
+import pytest
+import tifffile
+
+from nfdepth.io import (
+    ImageReadError,
+    OutputExistsError,
+    OutputWriteError,
+    atomic_write,
+    depth_to_points,
+    read_image,
+    read_pfm,
+    to_grey,
+    write_array,
+    write_colormap_png,
+    write_pfm,
+    write_ply,
+)
+
+
+def _ramp(h=5, w=7):
+    return (np.arange(h)[:, None] * 10.0 + np.arange(w)[None, :]).astype(np.float32)
+
+
+def _no_temp_files(folder):
+    return [p.name for p in folder.iterdir() if p.name.endswith(".tmp")] == []
+
+
+# ------------------------------------------------------------------ PFM
+
+
+def test_pfm_round_trip_keeps_orientation_and_nan(tmp_path):
+    a = _ramp()
+    a[1, 2] = np.nan
+    a[3, 4] = np.inf
+    p = write_pfm(tmp_path / "a.pfm", a)
+    b = read_pfm(p)
+    assert b.dtype == np.float32 and b.shape == a.shape
+    np.testing.assert_array_equal(b, a)  # NaN positions compared equal
+    assert b[0, 0] == 0 and b[-1, 0] == 40  # top row stays on top
+
+
+def test_pfm_file_layout_is_middlebury(tmp_path):
+    a = _ramp(2, 3)
+    p = write_pfm(tmp_path / "a.pfm", a)
+    raw = p.read_bytes()
+    assert raw.startswith(b"Pf\n3 2\n-1.0\n")
+    body = np.frombuffer(raw[len(b"Pf\n3 2\n-1.0\n") :], "<f4").reshape(2, 3)
+    np.testing.assert_array_equal(body, a[::-1])  # bottom row first
+
+
+def test_pfm_big_endian_and_colour_read(tmp_path):
+    a = _ramp(3, 4)
+    p = tmp_path / "be.pfm"
+    p.write_bytes(b"Pf\n4 3\n1.0\n" + np.ascontiguousarray(a[::-1], ">f4").tobytes())
+    np.testing.assert_array_equal(read_pfm(p), a)
+    rgb = np.stack([a, 2 * a, 3 * a], axis=-1)
+    write_pfm(tmp_path / "c.pfm", rgb)
+    np.testing.assert_array_equal(read_pfm(tmp_path / "c.pfm"), rgb)
+    np.testing.assert_allclose(read_image(tmp_path / "c.pfm"), to_grey(rgb), rtol=1e-6)
+
+
+def test_truncated_pfm(tmp_path):
+    p = tmp_path / "t.pfm"
+    p.write_bytes(b"Pf\n4 3\n-1.0\n" + b"\0" * 10)
+    with pytest.raises(ImageReadError, match=r"cannot read image '.*t\.pfm': truncated PFM"):
+        read_pfm(p)
+
+
+# ------------------------------------------------------------------ write_array
+
+
+@pytest.mark.parametrize("ext", [".pfm", ".tif", ".tiff", ".npy"])
+def test_write_array_round_trip(tmp_path, ext):
+    a = _ramp()
+    a[2, 3] = np.nan
+    p = write_array(tmp_path / f"d{ext}", a)
+    b = read_image(p)
+    assert b.dtype == np.float32
+    np.testing.assert_array_equal(b, a)
+    assert _no_temp_files(tmp_path)
+
+
+def test_write_array_tiff_is_float32(tmp_path):
+    p = write_array(tmp_path / "d.tif", _ramp().astype(np.float64))
+    assert tifffile.imread(p).dtype == np.float32
+
+
+def test_write_array_npy_keeps_float64(tmp_path):
+    a = _ramp().astype(np.float64) / 3
+    p = write_array(tmp_path / "d.npy", a)
+    b = np.load(p)
+    assert b.dtype == np.float64
+    np.testing.assert_array_equal(b, a)
+    np.testing.assert_array_equal(read_image(p, dtype=np.float64), a)
+
+
+def test_write_array_rejects_bad_input(tmp_path):
+    with pytest.raises(ValueError, match=r"path must end in one of \.pfm"):
+        write_array(tmp_path / "d.png", _ramp())
+    with pytest.raises(ValueError, match=r"array must be a non-empty array of shape \(H, W\), got shape \(2, 3, 4\)"):
+        write_array(tmp_path / "d.npy", np.zeros((2, 3, 4)))
+    with pytest.raises(TypeError, match="array must be a real numeric array"):
+        write_array(tmp_path / "d.npy", np.array([["a", "b"]]))
+
+
+# ------------------------------------------------------------------ atomic writes
+
+
+def test_atomic_write_refuses_overwrite_without_force(tmp_path):
+    p = tmp_path / "x.npy"
+    write_array(p, _ramp())
+    before = p.read_bytes()
+    with pytest.raises(OutputExistsError, match=r"exists; pass force=True \(--force"):
+        write_array(p, _ramp() + 1)
+    assert p.read_bytes() == before
+    write_array(p, _ramp() + 1, force=True)
+    np.testing.assert_array_equal(np.load(p), _ramp() + 1)
+    assert _no_temp_files(tmp_path)
+    assert sorted(q.name for q in tmp_path.iterdir()) == ["x.npy"]
+
+
+def test_atomic_write_failure_leaves_nothing(tmp_path):
+    def boom(fh):
+        fh.write(b"partial")
+        raise RuntimeError("writer failed")
+
+    with pytest.raises(RuntimeError, match="writer failed"):
+        atomic_write(tmp_path / "y.bin", boom)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_bad_directory(tmp_path):
+    with pytest.raises(OutputWriteError, match="does not exist"):
+        atomic_write(tmp_path / "missing" / "z.bin", lambda fh: fh.write(b"1"))
+    with pytest.raises(OutputWriteError, match="is a directory"):
+        atomic_write(tmp_path, lambda fh: fh.write(b"1"), force=True)
+    assert issubclass(OutputWriteError, ValueError) and issubclass(OutputExistsError, ValueError)
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs POSIX permissions and a non-root user")
+def test_atomic_write_unwritable_directory(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        with pytest.raises(OutputWriteError, match="cannot write"):
+            atomic_write(ro / "z.bin", lambda fh: fh.write(b"1"))
+    finally:
+        ro.chmod(0o700)
+
+
+def test_atomic_write_file_mode_follows_umask(tmp_path):
+    p = atomic_write(tmp_path / "m.bin", lambda fh: fh.write(b"abc"))
+    mask = os.umask(0o022)
+    os.umask(mask)
+    assert p.read_bytes() == b"abc"
+    if os.name == "posix":
+        assert p.stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+# ------------------------------------------------------------------ reading images
+
+
+def test_png_16bit_read_exactly(tmp_path):
+    a = np.arange(6 * 9, dtype=np.uint16).reshape(6, 9) * 1200
+    p = tmp_path / "a.png"
+    assert cv2.imwrite(str(p), a)
+    b = read_image(p)
+    assert b.dtype == np.float32 and b.max() == a.max() > 255
+    np.testing.assert_array_equal(b, a.astype(np.float32))
+    np.testing.assert_array_equal(read_image(p, dtype=None), a)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+def test_pgm_read_exactly(tmp_path, dtype):
+    a = (np.arange(5 * 8).reshape(5, 8) * (7 if dtype == np.uint8 else 1600)).astype(dtype)
+    p = tmp_path / "a.pgm"
+    assert cv2.imwrite(str(p), a)
+    assert p.read_bytes()[:2] == b"P5"
+    np.testing.assert_array_equal(read_image(p, dtype=np.float64), a.astype(np.float64))
+
+
+def test_colour_png_to_grey_is_bt601_luma(tmp_path):
+    rng = np.random.default_rng(0)
+    rgb = rng.integers(0, 256, size=(6, 7, 3), dtype=np.uint8)
+    p = tmp_path / "c.png"
+    assert cv2.imwrite(str(p), rgb[..., ::-1])  # cv2 writes BGR
+    expected = 0.299 * rgb[..., 0] + 0.587 * rgb[..., 1] + 0.114 * rgb[..., 2]
+    np.testing.assert_allclose(read_image(p, dtype=np.float64), expected, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(read_image(p), expected, rtol=1e-6)
+    np.testing.assert_array_equal(read_image(p, grey=False, dtype=None), rgb)  # RGB order
+
+
+def test_colour_ppm_and_rgba_png(tmp_path):
+    rgb = np.random.default_rng(1).integers(0, 256, size=(4, 5, 3), dtype=np.uint8)
+    p = tmp_path / "c.ppm"
+    assert cv2.imwrite(str(p), rgb[..., ::-1])
+    np.testing.assert_array_equal(read_image(p, grey=False, dtype=None), rgb)
+    rgba = np.concatenate([rgb, np.full((4, 5, 1), 7, np.uint8)], axis=-1)
+    q = tmp_path / "a.png"
+    assert cv2.imwrite(str(q), rgba[..., [2, 1, 0, 3]])
+    np.testing.assert_allclose(read_image(q), to_grey(rgb), rtol=1e-6)  # alpha dropped
+
+
+def test_jpeg_and_tiff_colour(tmp_path):
+    grey = np.full((8, 8), 120, np.uint8)
+    p = tmp_path / "g.jpg"
+    assert cv2.imwrite(str(p), grey)
+    assert abs(float(read_image(p).mean()) - 120) < 1.5
+    rgb = np.random.default_rng(2).integers(0, 256, size=(4, 5, 3), dtype=np.uint8)
+    t = tmp_path / "c.tif"
+    tifffile.imwrite(t, rgb)
+    np.testing.assert_allclose(read_image(t), to_grey(rgb), rtol=1e-6)
+
+
+def test_to_grey_shapes_and_errors():
+    g = np.arange(6, dtype=np.uint8).reshape(2, 3)
+    assert to_grey(g).dtype == np.float32
+    np.testing.assert_array_equal(to_grey(g), g)
+    np.testing.assert_array_equal(to_grey(np.stack([g, g], -1)), g)
+    assert to_grey(np.ones((2, 2, 3))).dtype == np.float64
+    np.testing.assert_allclose(to_grey(np.ones((2, 2, 3))), 1.0)
+    with pytest.raises(ValueError, match=r"got shape \(2, 2, 5\)"):
+        to_grey(np.ones((2, 2, 5)))
+    with pytest.raises(TypeError, match="real numeric"):
+        to_grey(np.ones((2, 2), complex))
+
+
+# ------------------------------------------------------------------ read errors
+
+
+def test_truncated_png(tmp_path):
+    p = tmp_path / "t.png"
+    assert cv2.imwrite(str(p), np.random.default_rng(3).integers(0, 256, (64, 64), dtype=np.uint8))
+    data = p.read_bytes()
+    p.write_bytes(data[: len(data) // 2])
+    with pytest.raises(ImageReadError, match=r"cannot read image '.*t\.png': .*(broken or truncated)"):
+        read_image(p)
+
+
+def test_truncated_ppm_and_jpeg(tmp_path):
+    p = tmp_path / "t.ppm"
+    p.write_bytes(b"P6\n10 10\n255\n" + b"\1" * 50)
+    with pytest.raises(ImageReadError, match=r"cannot read image '.*t\.ppm'"):
+        read_image(p)
+    j = tmp_path / "t.jpg"
+    assert cv2.imwrite(str(j), np.zeros((16, 16), np.uint8))
+    j.write_bytes(j.read_bytes()[:-40])
+    with pytest.raises(ImageReadError, match="truncated JPEG"):
+        read_image(j)
+
+
+@pytest.mark.parametrize("name", ["e.png", "e.pgm", "e.tif", "e.npy", "e.pfm"])
+def test_empty_file(tmp_path, name):
+    p = tmp_path / name
+    p.write_bytes(b"")
+    with pytest.raises(ImageReadError, match=rf"cannot read image '.*{re.escape(name)}': the file is empty"):
+        read_image(p)
+
+
+def test_directory_missing_unsupported(tmp_path):
+    d = tmp_path / "dir.png"
+    d.mkdir()
+    with pytest.raises(ImageReadError, match=r"cannot read image '.*dir\.png': it is a directory"):
+        read_image(d)
+    with pytest.raises(ImageReadError, match=r"cannot read image '.*nope\.png': no such file"):
+        read_image(tmp_path / "nope.png")
+    with pytest.raises(ImageReadError, match=r"no such file"):
+        read_image(tmp_path / "nope.xyz")
+    u = tmp_path / "a.gif"
+    u.write_bytes(b"GIF89a")
+    with pytest.raises(ImageReadError, match=r"unsupported extension '\.gif'"):
+        read_image(u)
+    assert issubclass(ImageReadError, ValueError)
+
+
+def test_garbage_tiff_and_npy(tmp_path):
+    for name in ("g.tif", "g.npy"):
+        p = tmp_path / name
+        p.write_bytes(b"this is not an image at all")
+        with pytest.raises(ImageReadError, match=rf"cannot read image '.*{re.escape(name)}'"):
+            read_image(p)
+
+
+def test_read_image_dtype_check(tmp_path):
+    p = write_array(tmp_path / "a.npy", _ramp())
+    with pytest.raises(ValueError, match="dtype=int32 is not supported"):
+        read_image(p, dtype=np.int32)
+    bad = tmp_path / "b.npy"
+    np.save(bad, np.zeros((2, 3, 4, 5)))
+    with pytest.raises(ImageReadError, match=r"shape \(2, 3, 4, 5\)"):
+        read_image(bad)
+
+
+# ------------------------------------------------------------------ colour map
+
+
+def test_colormap_png(tmp_path):
+    a = _ramp()
+    a[0, 0] = np.nan
+    p = write_colormap_png(tmp_path / "q.png", a, cmap="viridis")
+    img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
+    assert img.shape == (5, 7, 3) and img.dtype == np.uint8
+    assert (img[0, 0] == 0).all()  # NaN black
+    from matplotlib import colormaps
+
+    top = np.array(colormaps["viridis"](1.0, bytes=True)[:3])
+    np.testing.assert_array_equal(img[-1, -1, ::-1], top)  # max -> end of map (RGB)
+    with pytest.raises(OutputExistsError):
+        write_colormap_png(p, a)
+    write_colormap_png(p, np.full((3, 3), np.nan), force=True)  # all unknown: black
+    assert (cv2.imread(str(p)) == 0).all()
+    with pytest.raises(ValueError, match="cmap must be a Matplotlib colour map name"):
+        write_colormap_png(tmp_path / "r.png", a, cmap="no-such-map")
+    with pytest.raises(ValueError, match="vmax must be >= vmin"):
+        write_colormap_png(tmp_path / "r.png", a, vmin=3, vmax=1)
+
+
+# ------------------------------------------------------------------ PLY
+
+
+def _parse_ply(path):
+    raw = path.read_bytes()
+    end = raw.index(b"end_header\n") + len(b"end_header\n")
+    header = raw[:end].decode("ascii").splitlines()
+    n = int(next(line for line in header if line.startswith("element vertex")).split()[-1])
+    props = [line.split() for line in header if line.startswith("property")]
+    fields = [(p[2], "<f4" if p[1] == "float" else "u1") for p in props]
+    return header, np.frombuffer(raw[end:], dtype=np.dtype(fields), count=n), len(raw) - end
+
+
+def test_ply_header_count_and_vertices(tmp_path):
+    pts = np.array([[1.5, -2.0, 3.25], [np.nan, 0, 1], [4, 5, 6], [0, np.inf, 1]])
+    col = np.array([[255, 0, 10], [1, 2, 3], [7, 8, 9], [4, 5, 6]], np.uint8)
+    p = write_ply(tmp_path / "c.ply", pts, colors=col)
+    header, v, nbytes = _parse_ply(p)
+    assert header[:2] == ["ply", "format binary_little_endian 1.0"]
+    assert "element vertex 2" in header and header[-1] == "end_header"
+    assert [h for h in header if h.startswith("property")] == [
+        "property float x", "property float y", "property float z",
+        "property uchar red", "property uchar green", "property uchar blue",
+    ]
+    assert nbytes == 2 * 15
+    assert (v["x"][0], v["y"][0], v["z"][0]) == (1.5, -2.0, 3.25)
+    assert (v["red"][0], v["green"][0], v["blue"][0]) == (255, 0, 10)
+    assert (v["x"][1], v["red"][1]) == (4, 7)
+
+
+def test_ply_without_colours_and_errors(tmp_path):
+    p = write_ply(tmp_path / "p.ply", np.eye(3))
+    header, v, nbytes = _parse_ply(p)
+    assert "element vertex 3" in header and not any("red" in h for h in header) and nbytes == 36
+    with pytest.raises(ValueError, match=r"points_xyz must have shape \(N, 3\), got shape \(3, 2\)"):
+        write_ply(tmp_path / "q.ply", np.ones((3, 2)))
+    with pytest.raises(TypeError, match="colors must be integers"):
+        write_ply(tmp_path / "q.ply", np.ones((2, 3)), colors=np.ones((2, 3)))
+    with pytest.raises(ValueError, match="colors must lie in 0..255"):
+        write_ply(tmp_path / "q.ply", np.ones((2, 3)), colors=np.full((2, 3), 300))
+
+
+def test_depth_to_points_follows_conventions():
+    z = np.full((3, 5), 2.0)
+    z[0, 0] = np.nan
+    z[2, 4] = -1
+    img = np.arange(15, dtype=np.uint8).reshape(3, 5)
+    pts, col = depth_to_points(z, focal_px=4.0, image=img)
+    assert pts.shape == (13, 3) and col.shape == (13, 3) and col.dtype == np.uint8
+    # pixel (row 1, col 2) is the image centre -> on the optical axis
+    i = 5 - 1 + 2  # row-major index among kept pixels: row 0 has 4 kept, then (1,0),(1,1),(1,2)
+    np.testing.assert_allclose(pts[i], [0, 0, 2])
+    np.testing.assert_array_equal(col[i], [7, 7, 7])
+    pts2, none = depth_to_points(z, focal_px=4.0, cx_px=0.0, cy_px=0.0)
+    assert none is None
+    # pixel (row 2, col 3): X = (3 - 0) * 2 / 4, Y = (2 - 0) * 2 / 4
+    np.testing.assert_allclose(pts2[-1], [1.5, 1.0, 2.0])
+    with pytest.raises(ValueError, match="focal_px must be a positive finite number"):
+        depth_to_points(z, focal_px=0)
+    with pytest.raises(ValueError, match=r"image must have shape \(3, 5\)"):
+        depth_to_points(z, focal_px=1, image=np.zeros((2, 2)))
