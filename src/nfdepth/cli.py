@@ -19,6 +19,7 @@ code  meaning
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -34,6 +35,13 @@ EXIT_READ = 3
 EXIT_WRITE = 4
 EXIT_DATA = 5
 EXIT_INTERRUPTED = 130
+
+
+#: Modules that add sub-commands: each has ``register(subparsers, CLIError)``
+#: adding its parser with ``set_defaults(func=...)``; ``func(args)`` returns
+#: an exit code and raises ``CLIError(message, code)`` or the library's own
+#: errors, which :func:`main` turns into one line on stderr.
+_PLUGIN_COMMANDS: tuple[str, ...] = ()
 
 
 class CLIError(Exception):
@@ -359,6 +367,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE", help="write the records as JSON")
     p.add_argument("--quick", action="store_true", help="small sizes, fewer repeats (< 1 min)")
     p.set_defaults(func=_cmd_bench)
+
+    for module in _PLUGIN_COMMANDS:
+        importlib.import_module(f"nfdepth.{module}").register(sub, CLIError)
     return parser
 
 
