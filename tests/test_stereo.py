@@ -233,3 +233,47 @@ def test_tsukuba_edge_points():
     # at 4.82-4.85 px by a photometric check, 3 % off its label of 5 px, which
     # sets the floor of this median (measured 3.16 %).
     assert np.median(err / truth[sel]) <= 0.035
+
+
+@pytest.mark.data
+def test_middlebury2005_art_three_and_seven_views():
+    """Art (Middlebury 2005, half size), reference view1, against SGBM (view1, view2) at the same points.
+
+    Measured (3 views view0-2 / 7 views view0-6): edge points 6786 / 13582,
+    edge bad-1px 24.0 % / 15.0 % vs SGBM at the same points 24.5 % / 16.2 %,
+    edge median relative error 0.47 % / 0.52 %; dense coverage of the truth
+    83.3 % / 90.0 %, dense bad-1px 14.6 % / 16.3 % (SGBM dense: 92.8 %, 9.7 %).
+    """
+    cv2 = pytest.importorskip("cv2")
+    folder = _data_root() / "middlebury2005" / "Art"
+    if not (folder / "disp1.png").exists():
+        pytest.skip(f"Middlebury 2005 Art not found under {folder} (set NFDEPTH_DATA)")
+    colour = [cv2.imread(str(folder / f"view{k}.png")) for k in range(7)]
+    views = [cv2.cvtColor(c, cv2.COLOR_BGR2GRAY).astype(np.float32) for c in colour]
+    v = cv2.imread(str(folder / "disp1.png"), cv2.IMREAD_UNCHANGED).astype(np.float32)
+    truth = np.where(v > 0, v / 8.0, np.nan)  # neighbour-step disparity
+    known = np.isfinite(truth)
+    sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=32, blockSize=5, P1=8 * 3 * 25, P2=32 * 3 * 25, mode=cv2.STEREO_SGBM_MODE_HH)
+    raw = sgbm.compute(colour[1], colour[2]).astype(np.float32)
+    ref_disp = np.where(raw >= 0, raw / 16.0, np.nan)
+
+    def bad1(d, mask):
+        m = mask & np.isfinite(d) & known
+        return np.mean(np.abs(d[m] - truth[m]) > 1.0), m.sum()
+
+    results = {}
+    for name, sel in (("3", [0, 1, 2]), ("7", list(range(7)))):
+        r = static_stereo([views[i] for i in sel], reference=1)
+        edges = r.edge_mask & r.valid
+        b_nf, n_nf = bad1(r.disparity, edges)
+        b_sg, _ = bad1(ref_disp, edges)
+        b_dense, n_dense = bad1(r.disparity, np.ones_like(known))
+        results[name] = (b_nf, n_nf, b_sg, b_dense, n_dense / known.sum())
+    b3, n3, sg3, dense3, cov3 = results["3"]
+    b7, n7, sg7, dense7, cov7 = results["7"]
+    assert n3 > 5000 and n7 > 10000
+    assert b3 <= sg3 + 0.01  # 24.0 % vs 24.5 %
+    assert b7 <= sg7  # 15.0 % vs 16.2 %
+    assert b7 < 0.75 * b3  # seven views fix occlusion-prone edge points
+    assert cov7 >= 0.89 and dense7 <= 0.19  # 90.0 %, 16.3 %
+    assert cov3 >= 0.80 and dense3 <= 0.17  # 83.3 %, 14.6 %

@@ -35,6 +35,21 @@ measurement in a coarse-to-fine warping scheme:
    Lucas-Kanade along the baseline. Steps are clamped to +-1 px per
    iteration; a 5 x 5 median removes outliers after each level; the field is
    upsampled (``cv2.resize``, values x 2) to the next level.
+   The update is aggregated with a weighted guided filter (He et al. 2010;
+   ``aggregation="guided"``), guided by the reference, so that it follows
+   intensity edges; ``aggregation="gaussian"`` is the plain window. With
+   ``view_schedule`` the coarsest level uses only the nearest view on each
+   side and the span of views doubles per level (all views at the finest),
+   since far views multiply the warp error of a coarse disparity.
+   Occlusion weights compare each view's local mismatch to the best view's.
+3b. At the finest level (``propagate_levels``) the field is refined
+   discretely (:func:`_propagate`): every pixel takes the best of its own
+   disparity and those of neighbours 3-64 px away, scored by a guided-filter
+   aggregated matching cost that is one-sided (left views or right views,
+   whichever match better; Kang & Szeliski 2001). This undoes the
+   foreground fattening of the coarse levels and fills weakly textured
+   areas from textured neighbours; ``polish_iterations`` differential updates
+   (guided, radius 2) restore sub-pixel precision.
 4. At the finest level the strong zero-crossing, non-corner edge points
    (:func:`nfdepth.edges.select_edge_points`, the paper's sparse output) are
    refined with their *own* point-wise estimate (paper eq. 6 per point):
@@ -195,6 +210,128 @@ def _blur(a: np.ndarray, sigma: float) -> np.ndarray:
     return cv2.GaussianBlur(a, (2 * radius + 1, 2 * radius + 1), sigma, borderType=cv2.BORDER_REFLECT)
 
 
+def _box(a: np.ndarray, radius: int) -> np.ndarray:
+    return cv2.boxFilter(a, -1, (2 * radius + 1, 2 * radius + 1), normalize=True, borderType=cv2.BORDER_REFLECT)
+
+
+def _weighted_guided(guide, w, wp, radius, eps):
+    """Weighted guided filter (He et al. 2010, with per-pixel weights ``w``).
+
+    In every ``(2 radius + 1)^2`` box the residual ``p`` is fitted as ``a I + b``
+    in the guide ``I`` by weighted least squares (weights ``w``, ``wp = w p``,
+    ridge ``eps`` on ``a``); every pixel averages the coefficients of the boxes
+    that hold it, weighted by their total weight. A depth step that coincides
+    with an intensity step is kept instead of blurred. NaN where no box holds
+    any weight.
+    """
+    g = guide.astype(np.float32)
+    sw = _box(w, radius)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mi = _box(w * g, radius) / sw
+        mp = _box(wp, radius) / sw
+        cip = _box(wp * g, radius) / sw - mi * mp
+        vi = _box(w * g * g, radius) / sw - mi * mi
+        a = cip / (np.maximum(vi, 0.0) + np.float32(eps))
+        b = mp - a * mi
+        ok = sw > 0
+        a = np.where(ok, a, 0.0).astype(np.float32)
+        b = np.where(ok, b, 0.0).astype(np.float32)
+        sa = _box(sw * a, radius)
+        sb = _box(sw * b, radius)
+        norm = _box(sw, radius)
+        return ((sa * g + sb) / norm).astype(np.float32)
+
+
+def _guided(guide, p, radius, eps):
+    """Plain guided filter (He et al. 2010) of ``p`` with guide ``guide``."""
+    mi = _box(guide, radius)
+    vi = _box(guide * guide, radius) - mi * mi
+    mp = _box(p, radius)
+    a = (_box(guide * p, radius) - mi * mp) / (np.maximum(vi, 0.0) + np.float32(eps))
+    b = mp - a * mi
+    return (_box(a, radius) * guide + _box(b, radius)).astype(np.float32)
+
+
+def _shifted(d, dr, dc):
+    """``out(r, c) = d(r + dr, c + dc)`` with the border replicated."""
+    h, w = d.shape
+    p = max(abs(dr), abs(dc))
+    big = np.pad(d, p, mode="edge")
+    return big[p + dr : p + dr + h, p + dc : p + dc + w]
+
+
+_OFFSETS = ((0, 3), (0, -3), (3, 0), (-3, 0), (0, 9), (0, -9), (9, 0), (-9, 0), (0, 24), (0, -24), (24, 0), (-24, 0), (0, 64), (0, -64), (64, 0), (-64, 0))
+
+
+def _view_costs(smoothed, t, ref, d):
+    """Per-pixel absolute difference of every warped view to the reference."""
+    h, w = d.shape
+    rows = np.broadcast_to(np.arange(h, dtype=np.float32)[:, None], (h, w))
+    cols = np.arange(w, dtype=np.float32)[None, :]
+    out = {}
+    for k in range(len(smoothed)):
+        if k == ref:
+            continue
+        map_x = (cols - np.float32(t[k]) * d).astype(np.float32)
+        warped = cv2.remap(smoothed[k], map_x, rows, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        c = np.abs(warped - smoothed[ref])
+        outside = (map_x < 0) | (map_x > w - 1)
+        out[k] = np.where(outside, np.nan, c).astype(np.float32)
+    return out
+
+
+def _candidate_cost(smoothed, t, ref, d, guide, radius, eps):
+    """Edge-aware aggregated matching cost of the disparity field ``d``, one-sided for occlusions.
+
+    Views left and right of the reference are pooled separately (mean of
+    their aggregated costs); a pixel takes the better side (Kang & Szeliski
+    2001): a point hidden on one side is seen on the other.
+    """
+    costs = _view_costs(smoothed, t, ref, d)
+    sides = []
+    for side in (-1, 1):
+        ks = [k for k in costs if np.sign(t[k]) == side]
+        if not ks:
+            continue
+        acc = np.zeros(d.shape, np.float32)
+        cnt = np.zeros(d.shape, np.float32)
+        for k in ks:
+            c = costs[k]
+            ok = np.isfinite(c)
+            acc += np.where(ok, c, 0.0)
+            cnt += ok
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1), np.nan).astype(np.float32)
+        valid = np.isfinite(mean)
+        agg = _guided(guide, np.where(valid, mean, 0.0).astype(np.float32), radius, eps)
+        sides.append(np.where(valid, agg, np.inf))
+    return np.minimum.reduce(sides)
+
+
+def _propagate(smoothed, t, ref, d, guide, *, rounds, radius, eps):
+    """Discrete refinement: every pixel takes the best of its neighbours' disparities.
+
+    Candidates are the field itself and copies shifted by the offsets of
+    ``_OFFSETS``; the cost is the guided-filter-aggregated, one-sided
+    multi-view matching cost. Points near a depth step whose window blurred
+    foreground and background take the value of a neighbour on their own
+    side (PatchMatch-style propagation, cost-volume filtering after Hosni et
+    al. 2011).
+    """
+    g = guide.astype(np.float32)
+    for _ in range(rounds):
+        best = d.copy()
+        best_cost = _candidate_cost(smoothed, t, ref, d, g, radius, eps)
+        for dr, dc in _OFFSETS:
+            cand = _shifted(d, dr, dc)
+            cost = _candidate_cost(smoothed, t, ref, cand, g, radius, eps)
+            better = cost < best_cost
+            best = np.where(better, cand, best)
+            best_cost = np.where(better, cost, best_cost)
+        d = best.astype(np.float32)
+    return d
+
+
 def _nodes_from_pixels(d: np.ndarray) -> np.ndarray:
     """Values at the half-shifted nodes ``(r - 1/2, c - 1/2)``: mean of the 4 pixels around."""
     p = np.pad(d, 1, mode="edge")
@@ -248,9 +385,10 @@ def _regress(t, ref, diffs, weights):
 def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
     """Down-weight views that do not match the reference locally (occlusion).
 
-    ``E_k`` = local mean of ``(W_k - W_ref)^2 / t_k^2``: after warping, a view
-    that sees the point has ``E_k`` near the noise level (plus the common
-    ``delta^2 G^2``); one where it is hidden has a much larger ``E_k``. Views
+    ``E_k`` = local mean of ``(W_k - W_ref)^2``: after warping, a view that
+    sees the point has ``E_k`` near the noise level (plus ``t_k^2 delta^2
+    G^2``); one where it is hidden has a much larger ``E_k``. (Dividing by
+    ``t_k^2`` would make a far, occluded view look as good as a near one.) Views
     within a factor 2 of the best keep weight 1 (so pure noise never changes
     the weights); beyond it the weight falls as ``(2 E_best / E_k)^2``.
     Views whose warp left the image get 0.
@@ -259,7 +397,7 @@ def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
     for k, diff in enumerate(diffs):
         if k == ref:
             continue
-        e = _blur(diff * diff, window_px) / np.float32(t[k] ** 2)
+        e = _blur(diff * diff, window_px)
         energies[k] = np.where(inside[k] > 0, e, np.inf)
     best = np.minimum.reduce(list(energies.values()))
     out = [None] * len(diffs)
@@ -377,6 +515,19 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations):
     return result
 
 
+def _active_views(t, ref, level, levels):
+    """Views used at ``level``: the nearest on each side at the coarsest, the span doubling per finer level.
+
+    Far views have large warp errors while the disparity is still coarse (``|t_k|``
+    times the error); they join once the field is close.
+    """
+    near = np.min(np.abs(np.delete(t, ref)))
+    span = near * 2.0 ** (levels - 1 - level) * 1.01
+    if level == 0:
+        span = np.inf
+    return [k for k in range(len(t)) if k == ref or abs(t[k]) <= span]
+
+
 def _check_positions(positions, n, reference):
     if positions is None:
         pos = np.arange(n, dtype=np.float64)
@@ -418,6 +569,15 @@ def static_stereo(
     max_std_px: float = 1.0,
     max_edge_std_px: float = 0.15,
     median_px: int = 5,
+    view_schedule: bool = True,
+    aggregation: str = "guided",
+    guided_eps: float = 0.01,
+    guided_scale: float = 1.5,
+    propagate_rounds: int = 2,
+    propagate_levels: int = 1,
+    propagate_radius: int = 4,
+    polish_iterations: int = 1,
+    max_edge_disagreement_px: float = 0.5,
     dtype=np.float32,
 ) -> StereoResult:
     """Dense multi-view disparity from relative normal flow, coarse to fine.
@@ -484,6 +644,25 @@ def static_stereo(
     median_px : int
         Median filter size applied to the dense field after each level
         (0 or 1: none; 3 or 5).
+    view_schedule : bool
+        Add views coarse to fine by distance (nearest first; all at the finest level).
+    aggregation : {"guided", "gaussian"}
+        Aggregation of the per-level update: weighted guided filter (box radius
+        ``guided_scale * dense_window_px``, ridge ``guided_eps`` on the guide
+        normalised to its 1-99 % range) or the Gaussian window.
+    guided_eps, guided_scale : float
+        Guided-filter ridge and radius factor (see ``aggregation``).
+    propagate_rounds : int
+        Rounds of discrete neighbour propagation (0: none).
+    propagate_levels : int
+        Number of finest levels that run the propagation.
+    propagate_radius : int
+        Box radius (px) of the guided cost aggregation of the propagation.
+    polish_iterations : int
+        Differential updates after each propagation.
+    max_edge_disagreement_px : float
+        Edge points whose point-wise estimate differs from the dense field by
+        more than this are ``UNCERTAIN``.
     dtype : float32
         Working precision (float32; float64 is accepted and converted).
 
@@ -519,6 +698,9 @@ def static_stereo(
     if not max_edge_std_px > 0:
         msg = f"max_edge_std_px must be > 0 (inf allowed), got {max_edge_std_px!r}"
         raise ValueError(msg)
+    if aggregation not in ("guided", "gaussian"):
+        msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
+        raise ValueError(msg)
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
@@ -547,6 +729,8 @@ def static_stereo(
 
     d = np.zeros(pyramids[0][-1].shape, np.float32)
     var = np.full(d.shape, np.inf, np.float32)
+    guided_radius = max(1, int(round(guided_scale * dense_window_px)))
+    guide = [(gaussian_smooth(lv, sigma_px=0.5) - np.float32(np.percentile(views[ref], 1))) / np.float32(max(spread, 1e-6)) for lv in pyramids[ref]]
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
         s_c = noise_floor * _PYRDOWN_NOISE**level * gain  # noise std of one cell value
@@ -554,8 +738,12 @@ def static_stereo(
             h, w = smoothed[0].shape
             d = 2.0 * cv2.resize(d, (w, h), interpolation=cv2.INTER_LINEAR)
             var = 4.0 * cv2.resize(var, (w, h), interpolation=cv2.INTER_LINEAR)
+        active = _active_views(t, ref, level, levels) if view_schedule else list(range(n))
+        sub_sm = [smoothed[k] for k in active]
+        sub_t = t[active]
+        sub_ref = active.index(ref)
         for _ in range(int(iterations_per_level)):
-            m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+            m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
             num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
             den = _blur(info, dense_window_px)
@@ -567,7 +755,10 @@ def static_stereo(
             red = np.where(np.isfinite(red), np.maximum(red, 1.0), 1.0).astype(np.float32)
             k2 = 1.0 / (4.0 * np.pi * dense_window_px**2)  # sum K^2 / (sum K)^2 for a 2-D Gaussian
             with np.errstate(divide="ignore", invalid="ignore"):
-                delta = num / den
+                if aggregation == "guided":
+                    delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, guided_radius, guided_eps)
+                else:
+                    delta = num / den
                 # var of sum K w delta / sum K w for correlated cells; den2 / den >= 1
                 # guards windows whose information sits only in the tails
                 v_new = s_c**2 * red * corr_area * k2 * np.maximum(den2 / den, 1.0) / den
@@ -577,6 +768,15 @@ def static_stereo(
             var = np.where(ok, v_new, var).astype(np.float32)
         if median_px > 1:
             d = cv2.medianBlur(d, median_px)
+        if propagate_rounds and level <= propagate_levels - 1:
+            d = _propagate(smoothed, t, ref, d, guide[level], rounds=int(propagate_rounds), radius=propagate_radius, eps=guided_eps * 0.1)
+            for _ in range(int(polish_iterations)):
+                m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+                info = m.grad_col**2 * m.s_tt
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, 2, guided_eps)
+                delta = np.where(np.isfinite(delta), np.clip(delta, -0.5, 0.5), 0.0).astype(np.float32)
+                d = d + delta
     # final measurement at the finest level for validity, edges and uncertainty
     m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
     field = GradientField(m.grad_col, m.grad_row, m.slope)
@@ -608,6 +808,9 @@ def static_stereo(
         r_e[~(cos >= min_cos)] = Reason.UNDETERMINABLE
         r_e[(r_e == Reason.OK) & ((cnt_e < 2) | ~np.isfinite(std_e))] = Reason.NO_DATA
         r_e[(r_e == Reason.OK) & (std_e > max_edge_std_px)] = Reason.UNCERTAIN
+        # consistency with the dense (propagated) field: a point-wise estimate that
+        # left its neighbourhood's disparity straddles a depth step or an occlusion
+        r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d[er, ec]) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
         disparity[er, ec] = d_e
         std[er, ec] = std_e
         reason[er, ec] = r_e
