@@ -17,6 +17,14 @@ Depth solvers (eq. 4-6) and fusion
     depth_z_translation, fuse_inverse_depth, InverseDepth, Reason
 Pipelines (sections 2.3, 3.2, 3.3)
     dynamic_stereo, static_stereo_edges, EdgeDepth
+Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
+    static_stereo, StereoResult
+Files
+    read_image, write_array, read_pfm, write_pfm, write_ply, depth_to_points
+
+Sub-modules not imported here: ``synthetic`` (scenes), ``experiments`` (the
+paper's experiments), ``datasets`` (real data sets), ``plot`` (figures),
+``fast`` (fused fast path, streaming), ``bench`` (benchmarks).
 """
 
 from .camera import (
@@ -38,7 +46,9 @@ from .depth import (
 )
 from .edges import EdgeSelection, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, normal_flow
+from .io import depth_to_points, read_image, read_pfm, write_array, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
+from .stereo import StereoResult, static_stereo
 
 __version__ = "0.1.0"
 
@@ -66,5 +76,13 @@ __all__ = [
     "dynamic_stereo",
     "static_stereo_edges",
     "EdgeDepth",
+    "static_stereo",
+    "StereoResult",
+    "read_image",
+    "write_array",
+    "read_pfm",
+    "write_pfm",
+    "write_ply",
+    "depth_to_points",
     "__version__",
 ]
