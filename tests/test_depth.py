@@ -115,3 +115,14 @@ def test_bad_special_case_input():
         depth_x_translation(0.5, 0.0, focal_px=-1, delta_vx=1.0)
     with pytest.raises(ValueError, match="min_cos must be within"):
         solve_inverse_depth([1.0], camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=RigidMotion((1, 0, 0)), min_cos=2)
+
+
+def test_uncertainty_bound_marks_uncertain():
+    rel = RigidMotion(translation=(-2.0, 0, 0))
+    kw = {"camera": CAM, "rows": [59.5, 59.5], "cols": [79.5, 79.5], "alpha": [0.0, 0.0], "relative_motion": rel}
+    # rho = 0.5 / 240; rel std = std / 0.5
+    inv = solve_inverse_depth([-0.5, -0.5], delta_vn_std=[0.001, 0.05], max_rel_std=0.01, **kw)
+    assert inv.reason.tolist() == [Reason.OK, Reason.UNCERTAIN]
+    assert np.isnan(inv.depth[1])
+    with pytest.raises(ValueError, match="max_rel_std needs delta_vn_std"):
+        solve_inverse_depth([-0.5], max_rel_std=0.1, camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=rel)

@@ -143,10 +143,15 @@ def _cmd_reproduce(args) -> int:
     if args.noise < 0 or not np.isfinite(args.noise):
         raise CLIError(f"--noise must be a finite number >= 0, got {args.noise}")
     names = EXPERIMENTS if not args.only else tuple(args.only)
-    results = {n: run_paper_experiment(n, stencil=args.stencil, noise_std=args.noise, seed=args.seed) for n in names}
+    if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px <= 0):
+        raise CLIError(f"--sigma-px must be a positive number, got {args.sigma_px}")
+    if args.max_rel_std is not None and (not np.isfinite(args.max_rel_std) or args.max_rel_std <= 0):
+        raise CLIError(f"--max-rel-std must be a positive number, got {args.max_rel_std}")
+    common = {"noise_std": args.noise, "seed": args.seed, "sigma_px": args.sigma_px, "max_rel_std": args.max_rel_std}
+    results = {n: run_paper_experiment(n, stencil=args.stencil, **common) for n in names}
     literal = None
     if args.stencil != "paper" and not args.no_compare:
-        literal = {n: run_paper_experiment(n, stencil="paper", noise_std=args.noise, seed=args.seed) for n in names}
+        literal = {n: run_paper_experiment(n, stencil="paper", **common) for n in names}
     print(f"Paper experiments (stencil={args.stencil}, noise std={args.noise:g}, seed={args.seed}); relative errors, corners excluded")
     print(_reproduce_table(results, literal))
     if args.json:
@@ -332,6 +337,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--stencil", choices=("matched", "simpson", "paper"), default="matched", help="gradient stencil (default matched)")
     p.add_argument("--noise", type=float, default=0.0, metavar="STD", help="Gaussian image noise, grey levels")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise generator")
+    p.add_argument("--sigma-px", type=float, help="Gaussian smoothing for every experiment (default 4 px)")
+    p.add_argument("--max-rel-std", type=float, metavar="R", help="refuse points whose predicted relative depth std exceeds R")
     p.add_argument("--only", nargs="+", choices=("exp1", "exp2", "exp3", "exp4", "static"), help="run only these")
     p.add_argument("--no-compare", action="store_true", help="skip the literal-stencil comparison column")
     p.set_defaults(func=_cmd_reproduce)

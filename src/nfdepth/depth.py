@@ -101,6 +101,7 @@ def solve_inverse_depth(
     relative_motion: RigidMotion,
     delta_vn_std=None,
     min_cos: float = 0.25,
+    max_rel_std: float | None = None,
 ) -> InverseDepth:
     """Inverse depth from relative normal flow, general relative motion (eq. 4).
 
@@ -122,6 +123,10 @@ def solve_inverse_depth(
     min_cos : float
         Smallest ``|cos|`` of the angle between the edge normal and the
         translational flow direction accepted (0 accepts all ``B != 0``).
+    max_rel_std : float, optional
+        Refuse points whose relative standard deviation ``rho_std / rho``
+        (= that of depth, to first order) exceeds this bound
+        (:attr:`Reason.UNCERTAIN`). Needs ``delta_vn_std``.
 
     Returns
     -------
@@ -153,6 +158,16 @@ def solve_inverse_depth(
     else:
         with np.errstate(divide="ignore", invalid="ignore"):
             rho_std = np.where(ok, np.asarray(delta_vn_std, dtype=float) / np.abs(b), np.nan)
+    if max_rel_std is not None:
+        bound = check_nonnegative_finite("max_rel_std", max_rel_std)
+        if delta_vn_std is None:
+            msg = "max_rel_std needs delta_vn_std (the noise of the relative normal flow)"
+            raise ValueError(msg)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            too_uncertain = ok & ~(rho_std <= bound * rho)
+        reason[too_uncertain] = Reason.UNCERTAIN
+        rho = np.where(too_uncertain, np.nan, rho)
+        rho_std = np.where(too_uncertain, np.nan, rho_std)
     return InverseDepth(rho, rho_std, reason, np.asarray(b, dtype=float))
 
 

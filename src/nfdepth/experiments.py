@@ -91,8 +91,14 @@ def run_paper_experiment(
     noise_std: float = 0.0,
     seed: int = 0,
     image_size_px: int = 200,
+    max_rel_std: float | None = None,
 ) -> ExperimentResult:
-    """Render and run one of ``exp1 .. exp4`` or ``static`` (module docstring)."""
+    """Render and run one of ``exp1 .. exp4`` or ``static`` (module docstring).
+
+    ``max_rel_std`` refuses points whose predicted relative depth uncertainty
+    exceeds it (useful with ``noise_std > 0``; see
+    :func:`nfdepth.depth.solve_inverse_depth`).
+    """
     if name not in EXPERIMENTS:
         msg = f"experiment must be one of {EXPERIMENTS}, got {name!r}"
         raise ValueError(msg)
@@ -110,6 +116,7 @@ def run_paper_experiment(
             sigma_px=sigma,
             stencil=stencil,
             noise_std=known_noise,
+            max_rel_std=max_rel_std,
         )
     else:
         number = int(name[3:])
@@ -122,6 +129,7 @@ def run_paper_experiment(
             sigma_px=sigma,
             stencil=stencil,
             noise_std=known_noise,
+            max_rel_std=max_rel_std,
         )
     runtime = time.perf_counter() - start
     true_depth = np.asarray(scene.depth_at(result.rows, result.cols), dtype=float)

@@ -128,6 +128,7 @@ def _edge_result(
     noise,
     edge_options,
     min_cos,
+    max_rel_std=None,
 ):
     selection = select_edge_points(shared, smoothed_middle, **edge_options)
     rows_grid, cols_grid = GradientField.cell_centres(shared.shape)
@@ -143,6 +144,7 @@ def _edge_result(
         relative_motion=relative_motion,
         delta_vn_std=delta_vn_std[m],
         min_cos=min_cos,
+        max_rel_std=max_rel_std,
     )
     return EdgeDepth(
         rows=rows,
@@ -181,6 +183,7 @@ def dynamic_stereo(
     max_corner_ratio: float = 0.05,
     corner_window_px: float | None = None,
     min_cos: float = 0.25,
+    max_rel_std: float | None = None,
     noise_std: float | None = None,
     dtype=np.float32,
 ) -> EdgeDepth:
@@ -207,8 +210,9 @@ def dynamic_stereo(
         Edge-point rules (:func:`nfdepth.edges.select_edge_points`);
         ``corner_window_px`` defaults to ``2 * sigma_px``: the
         smoothing spreads a corner over about two sigma.
-    min_cos : float
-        Determinability threshold (:func:`nfdepth.depth.solve_inverse_depth`).
+    min_cos, max_rel_std : float
+        Determinability threshold and optional bound on the relative
+        uncertainty of depth (:func:`nfdepth.depth.solve_inverse_depth`).
     noise_std : float, optional
         Image noise (grey levels); estimated from the frames when omitted.
 
@@ -257,6 +261,7 @@ def dynamic_stereo(
         noise=noise,
         edge_options=edge_options,
         min_cos=min_cos,
+        max_rel_std=max_rel_std,
     )
 
 
@@ -273,6 +278,7 @@ def static_stereo_edges(
     max_corner_ratio: float = 0.05,
     corner_window_px: float | None = None,
     min_cos: float = 0.25,
+    max_rel_std: float | None = None,
     noise_std: float | None = None,
     max_span: int | None = None,
     dtype=np.float32,
@@ -360,6 +366,7 @@ def static_stereo_edges(
         noise=noise,
         edge_options=edge_options,
         min_cos=min_cos,
+        max_rel_std=max_rel_std,
     )
 
 
