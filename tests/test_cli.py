@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from nfdepth.cli import main
@@ -49,7 +50,17 @@ def test_demo_writes_figures(tmp_path, capsys):
     code, out, err = run_cli(capsys, "demo", "--out", str(tmp_path / "demo"))
     assert code == 0, err
     assert "edge points with depth" in out
-    assert len(list((tmp_path / "demo").glob("*.png"))) >= 10
+    demo = tmp_path / "demo"
+    assert len(list(demo.glob("*.png"))) >= 10
+    from nfdepth.io import read_pfm
+
+    depth = read_pfm(demo / "depth.pfm")
+    finite = depth[np.isfinite(depth)]
+    assert finite.size > 300  # edge points of the pyramid
+    assert 195 < finite.min() and finite.max() < 410  # apex 200, base 400
+    header = (demo / "points.ply").read_bytes()[:200]
+    assert header.startswith(b"ply\nformat binary_little_endian 1.0")
+    assert len(list((demo / "example").glob("pyramid_view*.png"))) == 3
 
 
 @pytest.mark.parametrize(

@@ -175,12 +175,20 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_demo(args) -> int:
+    import cv2
+
+    from . import plot
     from .experiments import run_paper_experiment
+    from .io import atomic_write, depth_to_points, write_array, write_ply
+    from .stereo import static_stereo
 
     out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
     print("nfdepth demo: the paper's pyramid, dynamic stereo (experiment 1) and static stereo")
+    results = {}
     for name in ("exp1", "static"):
         res = run_paper_experiment(name)
+        results[name] = res
         s = res.summary()
         z = res.result.depth[res.result.valid]
         print(
@@ -189,6 +197,31 @@ def _cmd_demo(args) -> int:
             f"median depth error {100 * s['depth_rel_error']['median']:.2f} %, max {100 * s['depth_rel_error']['max']:.2f} %"
         )
         _write_paper_figures(out, res)
+    # The bundled example: the static row as 16-bit PNG files, then the same
+    # job as `nfdepth stereo --edges-only` on them: a depth map and a point cloud.
+    scene = results["static"].scene
+    example = out / "example"
+    example.mkdir(exist_ok=True)
+    names = []
+    for k, frame in enumerate(scene.frames):
+        path = example / f"pyramid_view{k}.png"
+        data = np.round(np.clip(frame, 0, 255) * 256.0).astype(np.uint16)
+        ok, buf = cv2.imencode(".png", data)
+        atomic_write(path, lambda fh, b=buf: fh.write(b.tobytes()), force=True)
+        names.append(path)
+    views = [np.asarray(f, dtype=np.float32) for f in scene.frames]
+    stereo = static_stereo(views, reference=scene.reference_index, edges_only=True)
+    depth = stereo.depth(focal_px=scene.camera.focal_px, baseline=2.0)
+    write_array(out / "depth.pfm", depth.astype(np.float32), force=True)
+    plot.save_figure(plot.colormap_panel(depth, title="depth at edge points (static stereo)", unit="scene units", vmin=200, vmax=400), out / "depth.png")
+    pts, cols = depth_to_points(depth, focal_px=scene.camera.focal_px, image=np.clip(scene.frames[scene.reference_index], 0, 255).astype(np.uint8))
+    write_ply(out / "points.ply", pts, colors=cols, force=True)
+    finite = depth[np.isfinite(depth)]
+    print(
+        f"  example: {finite.size} edge points, depth {finite.min():.0f}..{finite.max():.0f} -> {out / 'depth.pfm'}, "
+        f"{out / 'depth.png'}, {out / 'points.ply'} ({len(pts)} points)"
+    )
+    print(f"  the same from the files: nfdepth stereo {' '.join(str(n) for n in names)} --edges-only --focal-px 100 --baseline 2 --out depth.pfm --ply points.ply")
     print(f"figures written to {out}/")
     return EXIT_OK
 
