@@ -87,7 +87,8 @@ def test_fast_exact_on_ramp():
     res = normal_flow_edges(frames, sigma_px=0.0)
     inner = (slice(1, -1), slice(1, -1))  # the matched stencil's edge padding bends the ramp at the border
     np.testing.assert_allclose(res.magnitude[inner], np.hypot(2.0, 3.0), rtol=1e-6)
-    np.testing.assert_allclose(res.alpha[inner], np.arctan2(3.0, 2.0), atol=1e-6)
+    # alpha is exact (float32 rounding) at edge points only; elsewhere cv2.phase's <= 2e-4 rad.
+    np.testing.assert_allclose(res.alpha[inner], np.arctan2(3.0, 2.0), atol=2e-4)
     np.testing.assert_allclose(res.vn[inner], 5.0 / np.hypot(2.0, 3.0), rtol=1e-6)
     ref = normal_flow(frames, sigma_px=0.0)
     np.testing.assert_allclose(res.magnitude, ref.magnitude, rtol=1e-6)
@@ -121,6 +122,27 @@ def test_streaming_equals_from_scratch():
     assert stream.frames_seen == len(frames)
     stream.reset()
     assert stream.push(frames[0]) is None
+
+
+def test_kept_results_are_never_overwritten():
+    # Outputs come from a recycled pool; a result (or a view of one) that the
+    # caller still holds must survive later calls unchanged.
+    a = _sequence((40, 50), seed=1)
+    b = _sequence((40, 50), seed=2)
+    first = normal_flow_edges(a, sigma_px=1.5)
+    saved = [x.copy() for x in first]
+    view = normal_flow_edges(a, sigma_px=1.5).vn[3:10]  # only a view kept
+    view_saved = view.copy()
+    for _ in range(4):
+        other = normal_flow_edges(b, sigma_px=1.5)
+    for x, y in zip(first, saved):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(view, view_saved)
+    assert not np.shares_memory(other.vn, first.vn) and not np.shares_memory(other.vn, view)
+    del first, view, other
+    again = normal_flow_edges(a, sigma_px=1.5)  # a free set is reused and rewritten
+    for x, y in zip(again, saved):
+        np.testing.assert_array_equal(x, y)
 
 
 def test_streaming_bad_input():

@@ -96,7 +96,7 @@ def _middlebury(shape):
 # ------------------------------------------------------------------- cases
 
 
-def _cases(frames, *, include_reference: bool):
+def _cases(frames, *, include_reference: bool, include_stereo: bool = True):
     from . import fast
     from .edges import select_edge_points
     from .normal_flow import gaussian_smooth, normal_flow
@@ -128,13 +128,16 @@ def _cases(frames, *, include_reference: bool):
 
     cases["nf_stream_frame"] = stream_push
 
-    try:
-        from .stereo import static_stereo  # written in parallel; may not exist yet
+    if not include_stereo:
+        cases["nf_static_stereo"] = "skipped: quick mode runs it at the smallest size only"
+    else:
+        try:
+            from .stereo import static_stereo  # written in parallel; may not exist yet
 
-        static_stereo(f32, reference=1)  # probe once (also warms up)
-        cases["nf_static_stereo"] = lambda: static_stereo(f32, reference=1)
-    except Exception as exc:  # noqa: BLE001 - any failure means "skip this case"
-        cases["nf_static_stereo"] = f"skipped: {type(exc).__name__}: {exc}"[:200]
+            static_stereo(f32, reference=1)  # probe once (also warms up)
+            cases["nf_static_stereo"] = lambda: static_stereo(f32, reference=1)
+        except Exception as exc:  # noqa: BLE001 - any failure means "skip this case"
+            cases["nf_static_stereo"] = f"skipped: {type(exc).__name__}: {exc}"[:200]
 
     sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=64, blockSize=5)
     bm = cv2.StereoBM_create(numDisparities=64, blockSize=15)
@@ -179,7 +182,8 @@ def run_benchmarks(
     Parameters
     ----------
     quick : bool
-        Fewer sizes (0.3 and 1.2 Mpx), 5 rounds, no reference path above 0.3 Mpx.
+        Fewer sizes (0.3 and 1.2 Mpx), 5 rounds, no reference path and no
+        static stereo above 0.35 Mpx.
     sizes : sequence of (rows, cols), optional
         Image sizes; default 0.3, 1.2 and 4.9 Mpx (quick: the first two).
     repeats : int, optional
@@ -208,7 +212,8 @@ def run_benchmarks(
                 if frames is None:
                     continue
                 include_reference = H * W <= (0.35e6 if quick else 1.3e6)
-                cases = _cases(frames, include_reference=include_reference)
+                # static stereo takes seconds per call: in quick mode only at the smallest size
+                cases = _cases(frames, include_reference=include_reference, include_stereo=include_reference or not quick)
                 timed = {k: v for k, v in cases.items() if callable(v)}
                 times: dict = {k: [] for k in timed}
                 for fn in timed.values():  # warm-up round

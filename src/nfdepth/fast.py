@@ -18,16 +18,25 @@ with far fewer passes over the image:
   axis with the 2-tap mean along the other is one ``cv2.filter2D`` call with
   a 2 x 4 kernel; ``BORDER_REPLICATE`` reproduces the reference's edge
   padding exactly.
-* **No per-call allocations** for intermediates: buffers live in a per-thread
-  workspace keyed by image size (fresh pages cost as much as a filter pass).
-  Only the four returned arrays are new.
+* **No per-call allocations.** Intermediates live in a per-thread
+  workspace keyed by image size (6 float32 + 3 bool images, 27 B/px). The
+  four outputs come from a pool of two sets that is recycled once the
+  caller holds no reference to a set (checked with CPython reference
+  counts against a private sentinel), so results that are kept are never
+  overwritten. Reason: fresh pages cost a page fault each, ~5 us apiece on
+  this kind of VM, and glibc returns large freed blocks to the kernel, so
+  re-allocating ~1.2 MB per output per call cost ~1300 faults (several ms)
+  per 640 x 480 triple. The sparse work runs in bands of rows for the same
+  reason (small temporaries).
 * **Sparse corner test.** The structure tensor is smoothed on the full grid
-  (three Gaussian passes), but its eigenvalue ratio is evaluated only at the
-  candidate cells (strong zero crossings inside the border), in float64.
-* **Fast exact angle.** ``cv2.phase`` (error ~1e-4 rad) refined by one
-  correction step ``alpha = a0 + (g_r cos a0 - g_c sin a0) / (g_c cos a0 +
-  g_r sin a0)``, accurate to float32 rounding (~2e-7 rad), about 20x cheaper
-  than ``numpy.arctan2``.
+  (three Gaussian passes, the reference's window, so masks stay identical);
+  its eigenvalue ratio is evaluated only at the candidate cells (strong zero
+  crossings inside the border), in float64.
+* **Angle.** ``cv2.phase`` on the whole grid (error <= 2e-4 rad), refined at
+  the edge points (the mask) by one correction step ``alpha = a0 + (g_r cos
+  a0 - g_c sin a0) / (g_c cos a0 + g_r sin a0)`` in float64: exact to
+  float32 rounding there. Off the edge points ``alpha`` keeps cv2.phase's
+  error (the full-grid refinement cost ~1.2 ms per 0.3 Mpx).
 
 :class:`StreamingNormalFlow` keeps each frame's smoothed image (and its cell
 mean) in a ring, so a video costs one Gaussian pass per new frame plus the
@@ -37,7 +46,8 @@ Positions: every output belongs to cell ``[r, c]`` -- the centre ``(r + 0.5,
 c + 0.5)`` of a 2 x 2 pixel group -- at the time of the middle frame, shape
 ``(H - 1, W - 1)``, exactly as in :mod:`nfdepth.normal_flow`.
 
-Differences from the reference (all at float32 rounding level):
+Differences from the reference (all at float32 rounding level, except
+``alpha`` off the edge points: within 2e-4 rad there, see above):
 
 * sums are taken in a different order (weighted sum before smoothing), so
   gradients agree to ~1e-6 of their scale, not bit for bit;
@@ -49,6 +59,7 @@ Differences from the reference (all at float32 rounding level):
 
 from __future__ import annotations
 
+import sys
 import threading
 from collections import deque
 from dataclasses import dataclass
@@ -77,7 +88,9 @@ class NormalFlowEdges:
         Normal flow ``-I_t / |grad I|`` in px per unit time (NaN where the
         gradient is exactly 0).
     alpha : ndarray float32
-        Normal direction ``atan2(I_row, I_col)`` in radians, in [-pi, pi].
+        Normal direction ``atan2(I_row, I_col)`` in radians, in [-pi, pi]:
+        exact to float32 rounding at the edge points (``mask``), within
+        2e-4 rad (``cv2.phase``) elsewhere.
     magnitude : ndarray float32
         ``|grad I|`` in intensity per pixel.
     mask : ndarray bool
@@ -148,30 +161,48 @@ def _gauss_kernel(sigma_px: float, radius_sigmas: float) -> np.ndarray:
 
 
 class _Workspace:
-    """Reusable float32 buffers for one image size (one thread)."""
+    """Reusable buffers for one image size (one thread): 6 float32 + 3 bool images, 27 B/px."""
 
     def __init__(self, shape):
         H, W = shape
         h, w = H - 1, W - 1
         f32 = np.float32
         self.shape = shape
-        self.S = np.empty((H, W), f32)  # weighted sum of the triple
-        self.D = np.empty((H, W), f32)  # f2 - f0
-        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum
-        self.G1 = np.empty((H, W), f32)  # smoothed middle frame
-        self.lap = np.empty((H, W), f32)
+        self.A = np.empty((H, W), f32)  # weighted sum -> Laplacian -> product
+        self.D = np.empty((H, W), f32)  # f2 - f0 -> smoothed middle frame -> product
+        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum -> product
         self.gt = np.empty((H, W), f32)  # I_t at cells ([:h, :w])
         self.gc = np.empty((H, W), f32)  # I_col at cells ([:h, :w])
         self.gr = np.empty((H, W), f32)  # I_row at cells ([:h, :w])
-        self.t1 = np.empty((h, w), f32)
-        self.t2 = np.empty((h, w), f32)
-        self.t3 = np.empty((h, w), f32)
-        self.j = [np.empty((h, w), f32) for _ in range(3)]
-        self.pos = np.empty((H, W), bool)
-        self.neg = np.empty((H, W), bool)
-        self.b1 = np.empty((h, w), bool)
-        self.b2 = np.empty((h, w), bool)
-        self.ge = np.empty((h, w), bool)
+        self.b1 = np.empty((H, W), bool)
+        self.b2 = np.empty((H, W), bool)
+        self.b3 = np.empty((h, w), bool)
+        self.pool: list = []  # recycled output sets (vn, alpha, mag, mask)
+
+    def outputs(self):
+        """Output arrays ``(vn, alpha, mag, mask)`` for one call.
+
+        Fresh pages cost a page fault each (~300 per 0.3 Mpx float32 array,
+        several microseconds apiece on a VM) and glibc hands large freed
+        blocks back to the kernel, so a loop that allocates its outputs anew
+        pays that every call. Instead, up to two sets are kept here and a set
+        is reused once nothing outside this pool refers to any of its arrays
+        (CPython reference counts: a result, a view or an exported buffer all
+        hold references), so results a caller keeps are never overwritten.
+        """
+        for item in self.pool:
+            # The last entry is a private sentinel that is never handed out: it
+            # sees exactly the references a free array sees, whatever this
+            # interpreter's reference-counting details are.
+            counts = [sys.getrefcount(x) for x in item]
+            if max(counts[:4]) <= counts[4]:
+                return item[:4]
+        h, w = self.shape[0] - 1, self.shape[1] - 1
+        f32 = np.float32
+        item = (np.empty((h, w), f32), np.empty((h, w), f32), np.empty((h, w), f32), np.empty((h, w), bool), np.empty(0, f32))
+        if len(self.pool) < 2:
+            self.pool.append(item)
+        return item[:4]
 
 
 _local = threading.local()
@@ -286,7 +317,13 @@ def _percentile_linear(values: np.ndarray, q: float) -> float:
 
 
 def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
-    """Everything after smoothing: stencils, flow, angle, edge points."""
+    """Everything after smoothing: stencils, flow, angle, edge points.
+
+    ``Gs`` (smoothed weighted sum) and ``gt_full`` (I_t at cells) may be
+    overwritten; ``G1`` (smoothed middle frame) is only read. Scratch use of
+    the workspace: ``A`` (Laplacian), then ``Gs``, ``gt`` and ``D`` hold the
+    structure-tensor products.
+    """
     p = k.p
     H, W = ws.shape
     h, w = H - 1, W - 1
@@ -297,26 +334,18 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
     gc = ws.gc[:h, :w]
     gr = ws.gr[:h, :w]
     gt = gt_full[:h, :w]
+    f32 = np.float32
 
-    mag = cv2.magnitude(gc, gr)  # new (h, w), returned
-    vn = cv2.divide(gt, mag, scale=-1.0)  # new; 0 where mag == 0
-    nonzero = cv2.countNonZero(mag)
-    if nonzero < mag.size:
-        np.copyto(vn, np.float32(np.nan), where=mag == 0)
-
-    # alpha = atan2(gr, gc): cv2.phase, then one exact correction step.
-    alpha = cv2.phase(gc, gr)  # new, [0, 2 pi), error ~1e-4 rad
-    cos_a, sin_a = cv2.polarToCart(None, alpha, x=ws.t1, y=ws.t2)
-    num = ws.t3
-    cv2.multiply(gr, cos_a, dst=num)
-    num -= cv2.multiply(gc, sin_a, dst=ws.j[0])
-    den = ws.j[1]
-    cv2.multiply(gc, cos_a, dst=den)
-    den += cv2.multiply(gr, sin_a, dst=ws.j[2])
-    cv2.divide(num, den, dst=num)  # 0 where den == 0 (mag == 0)
-    alpha += num
-    np.greater(alpha, _PI, out=ws.b1)
-    np.subtract(alpha, _TWO_PI, out=alpha, where=ws.b1)
+    vn, alpha, mag, mask = ws.outputs()
+    cv2.magnitude(gc, gr, mag)
+    cv2.divide(gt, mag, vn, scale=-1.0)  # 0 where mag == 0
+    if cv2.countNonZero(mag) < mag.size:
+        np.copyto(vn, f32(np.nan), where=mag == 0)
+    # alpha = atan2(gr, gc): cv2.phase (error <= 2e-4 rad) on the grid, exact at edge points below.
+    cv2.phase(gc, gr, alpha)  # [0, 2 pi)
+    b3 = ws.b3
+    np.greater(alpha, _PI, out=b3)
+    np.subtract(alpha, _TWO_PI, out=alpha, where=b3)
 
     # Edge points.
     if p.min_gradient is None:
@@ -324,51 +353,75 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
         min_gradient = p.relative_gradient * high
     else:
         min_gradient = p.min_gradient
-    mask = np.zeros((h, w), bool)
+    mask.fill(False)
     b = p.border_px
     if h > 2 * b and w > 2 * b:
         # Laplacian zero crossings of the smoothed middle frame (4 corners of each cell).
-        cv2.Laplacian(G1, cv2.CV_32F, dst=ws.lap, ksize=1, borderType=cv2.BORDER_REFLECT)
-        np.greater(ws.lap, 0, out=ws.pos)
-        np.less(ws.lap, 0, out=ws.neg)
+        lap = ws.A
+        cv2.Laplacian(G1, cv2.CV_32F, dst=lap, ksize=1, borderType=cv2.BORDER_REFLECT)
+        pos, neg = ws.b1, ws.b2
+        np.greater(lap, 0, out=pos)
+        np.less(lap, 0, out=neg)
         rs, cs = slice(b, h - b), slice(b, w - b)
         rs1, cs1 = slice(b + 1, h - b + 1), slice(b + 1, w - b + 1)
         inner = mask[rs, cs]
-        anyp = ws.b1[rs, cs]
-        anyn = ws.b2[rs, cs]
-        for src, dst in ((ws.pos, anyp), (ws.neg, anyn)):
+        tmp = b3[rs, cs]
+        for src, dst in ((pos, inner), (neg, tmp)):
             np.logical_or(src[rs, cs], src[rs, cs1], out=dst)
             dst |= src[rs1, cs]
             dst |= src[rs1, cs1]
-        np.logical_and(anyp, anyn, out=inner)
+        inner &= tmp
         m = mag[rs, cs]
-        ge = ws.ge[rs, cs]
-        np.greater_equal(m, min_gradient, out=ge)  # float32 compare, as the reference (NEP 50)
-        inner &= ge
-        np.greater(m, 0, out=ge)
-        inner &= ge
-        idx = np.flatnonzero(mask)
-        if idx.size:
-            # Structure tensor, smoothed on the full grid, eigenvalue ratio at candidates only.
-            j0, j1, j2 = ws.j
-            cv2.multiply(gc, gc, dst=ws.t1)
-            cv2.multiply(gr, gr, dst=ws.t2)
-            cv2.multiply(gc, gr, dst=ws.t3)
+        np.greater_equal(m, min_gradient, out=tmp)  # float32 compare, as the reference (NEP 50)
+        inner &= tmp
+        if not min_gradient > 0:
+            np.greater(m, 0, out=tmp)
+            inner &= tmp
+        if inner.any():
+            # Structure tensor, smoothed on the full grid; the sparse work below
+            # (exact angle, eigenvalue ratio) runs in bands of rows so that its
+            # temporaries stay small (large freed blocks go back to the kernel
+            # and cost page faults on the next call).
             tg = k.tg
-            cv2.sepFilter2D(ws.t1, cv2.CV_32F, tg, tg, dst=j0, borderType=cv2.BORDER_REFLECT)
-            cv2.sepFilter2D(ws.t2, cv2.CV_32F, tg, tg, dst=j1, borderType=cv2.BORDER_REFLECT)
-            cv2.sepFilter2D(ws.t3, cv2.CV_32F, tg, tg, dst=j2, borderType=cv2.BORDER_REFLECT)
-            jxx = j0.ravel()[idx].astype(np.float64)
-            jyy = j1.ravel()[idx].astype(np.float64)
-            jxy = j2.ravel()[idx].astype(np.float64)
-            half = 0.5 * (jxx + jyy)
-            root = np.sqrt(np.maximum(0.25 * (jxx - jyy) ** 2 + jxy**2, 0.0))
-            lam1 = half + root
-            lam2 = np.maximum(half - root, 0.0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ok = (lam1 > 0) & (lam2 / lam1 <= p.max_corner_ratio)
-            mask.ravel()[idx[~ok]] = False
+            for buf, (u, v) in zip((ws.Gs, ws.gt, ws.D), ((gc, gc), (gr, gr), (gc, gr))):
+                prod = buf[:h, :w]
+                cv2.multiply(u, v, dst=prod)
+                cv2.sepFilter2D(prod, cv2.CV_32F, tg, tg, dst=prod, borderType=cv2.BORDER_REFLECT)
+            step = max(1, _BAND_CELLS // w)
+            for r0 in range(b, h - b, step):
+                r1 = min(r0 + step, h - b)
+                idx = np.flatnonzero(mask[r0:r1])
+                if idx.size:
+                    idx += r0 * w
+                    _sparse(ws, alpha, mask, idx, w, p.max_corner_ratio)
     return NormalFlowEdges(vn, alpha, mag, mask, float(min_gradient))
+
+
+_BAND_CELLS = 16384
+
+
+def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
+    """Exact angle and corner rejection at the candidate cells ``idx`` (flat, cell grid)."""
+    fi = idx + idx // w  # flat index into the (H, W) buffers
+    # Exact angle at the edge points: one correction step on cv2.phase,
+    # alpha = a0 + (g_r cos a0 - g_c sin a0) / (g_c cos a0 + g_r sin a0)
+    # (float64; the step's error is ~|a - a0|^3 / 3, far below float32 rounding).
+    gcs = ws.gc.ravel()[fi].astype(np.float64)
+    grs = ws.gr.ravel()[fi].astype(np.float64)
+    a0 = alpha.ravel()[idx].astype(np.float64)
+    ca, sa = np.cos(a0), np.sin(a0)
+    alpha.ravel()[idx] = a0 + (grs * ca - gcs * sa) / (gcs * ca + grs * sa)
+    # Eigenvalue ratio of the smoothed structure tensor (float64, as the reference).
+    jxx = ws.Gs.ravel()[fi].astype(np.float64)
+    jyy = ws.gt.ravel()[fi].astype(np.float64)
+    jxy = ws.D.ravel()[fi].astype(np.float64)
+    half = 0.5 * (jxx + jyy)
+    root = np.sqrt(np.maximum(0.25 * (jxx - jyy) ** 2 + jxy**2, 0.0))
+    lam1 = half + root
+    lam2 = np.maximum(half - root, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ok = (lam1 > 0) & (lam2 / lam1 <= max_ratio)
+    mask.ravel()[idx[~ok]] = False
 
 
 def _check_frame_shape(frames):
@@ -423,16 +476,16 @@ def normal_flow_edges(
     ws = _workspace(f0.shape)
     w0, w1, w2 = k.weights
     # Weighted sum and difference; then three smoothing passes.
-    cv2.addWeighted(f0, w0, f2, w2, 0.0, dst=ws.S)
-    cv2.scaleAdd(f1, w1, ws.S, dst=ws.S)
+    cv2.addWeighted(f0, w0, f2, w2, 0.0, dst=ws.A)
+    cv2.scaleAdd(f1, w1, ws.A, dst=ws.A)
     cv2.subtract(f2, f0, dst=ws.D)
-    Gs = _blur(ws.S, ws.Gs, k)
-    G1 = _blur(f1, ws.G1, k)
+    Gs = _blur(ws.A, ws.Gs, k)
     if k.smooth:
         # Gaussian folded with the 2 x 2 cell mean and 1 / (2 dt): I_t at cells.
         cv2.sepFilter2D(ws.D, cv2.CV_32F, k.gm_x, k.gm_y, dst=ws.gt, anchor=(k.radius, k.radius), borderType=cv2.BORDER_REFLECT)
     else:
         cv2.filter2D(ws.D, cv2.CV_32F, k.box * np.float32(0.5 / p.frame_interval), dst=ws.gt, anchor=(0, 0), borderType=cv2.BORDER_REFLECT)
+    G1 = _blur(f1, ws.D, k)  # D is free now
     return _finish(ws, k, Gs, G1, ws.gt)
 
 
