@@ -46,7 +46,8 @@ def _assert_close(result, g, sel):
     # Angles compared on the circle, where the direction is defined to float32 precision.
     strong = g.magnitude > 1e-2 * scale
     dal = np.angle(np.exp(1j * (result.alpha.astype(np.float64) - g.alpha)))
-    assert np.max(np.abs(dal[strong])) < 1e-3
+    # alpha is computed at the candidate edge points only (NaN elsewhere).
+    assert np.all(np.isfinite(result.alpha[sel.mask]))
     assert np.max(np.abs(dal[sel.mask])) < 1e-5
     vn_ref = g.normal_flow
     m = sel.mask
@@ -87,8 +88,7 @@ def test_fast_exact_on_ramp():
     res = normal_flow_edges(frames, sigma_px=0.0)
     inner = (slice(1, -1), slice(1, -1))  # the matched stencil's edge padding bends the ramp at the border
     np.testing.assert_allclose(res.magnitude[inner], np.hypot(2.0, 3.0), rtol=1e-6)
-    # alpha is exact (float32 rounding) at edge points only; elsewhere cv2.phase's <= 2e-4 rad.
-    np.testing.assert_allclose(res.alpha[inner], np.arctan2(3.0, 2.0), atol=2e-4)
+    assert np.all(np.isnan(res.alpha))  # no edge points on a ramp: no angle computed
     np.testing.assert_allclose(res.vn[inner], 5.0 / np.hypot(2.0, 3.0), rtol=1e-6)
     ref = normal_flow(frames, sigma_px=0.0)
     np.testing.assert_allclose(res.magnitude, ref.magnitude, rtol=1e-6)

@@ -32,11 +32,10 @@ with far fewer passes over the image:
   (three Gaussian passes, the reference's window, so masks stay identical);
   its eigenvalue ratio is evaluated only at the candidate cells (strong zero
   crossings inside the border), in float64.
-* **Angle.** ``cv2.phase`` on the whole grid (error <= 2e-4 rad), refined at
-  the edge points (the mask) by one correction step ``alpha = a0 + (g_r cos
-  a0 - g_c sin a0) / (g_c cos a0 + g_r sin a0)`` in float64: exact to
-  float32 rounding there. Off the edge points ``alpha`` keeps cv2.phase's
-  error (the full-grid refinement cost ~1.2 ms per 0.3 Mpx).
+* **Angle.** ``alpha`` is computed (float64 ``atan2``) only at the candidate
+  edge points, where it is used; it is NaN elsewhere. A full-grid angle costs
+  more than a blur (``np.arctan2``) or is not deterministic (``cv2.phase``'s
+  SIMD path depends on buffer alignment).
 
 :class:`StreamingNormalFlow` keeps each frame's smoothed image (and its cell
 mean) in a ring, so a video costs one Gaussian pass per new frame plus the
@@ -46,8 +45,8 @@ Positions: every output belongs to cell ``[r, c]`` -- the centre ``(r + 0.5,
 c + 0.5)`` of a 2 x 2 pixel group -- at the time of the middle frame, shape
 ``(H - 1, W - 1)``, exactly as in :mod:`nfdepth.normal_flow`.
 
-Differences from the reference (all at float32 rounding level, except
-``alpha`` off the edge points: within 2e-4 rad there, see above):
+Differences from the reference (all at float32 rounding level; ``alpha`` is
+NaN off the candidate edge points, see above):
 
 * sums are taken in a different order (weighted sum before smoothing), so
   gradients agree to ~1e-6 of their scale, not bit for bit;
@@ -89,8 +88,8 @@ class NormalFlowEdges:
         gradient is exactly 0).
     alpha : ndarray float32
         Normal direction ``atan2(I_row, I_col)`` in radians, in [-pi, pi]:
-        exact to float32 rounding at the edge points (``mask``), within
-        2e-4 rad (``cv2.phase``) elsewhere.
+        at the candidate edge points (a superset of ``mask``), NaN
+        elsewhere.
     magnitude : ndarray float32
         ``|grad I|`` in intensity per pixel.
     mask : ndarray bool
@@ -337,15 +336,26 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
     f32 = np.float32
 
     vn, alpha, mag, mask = ws.outputs()
-    cv2.magnitude(gc, gr, mag)
-    cv2.divide(gt, mag, vn, scale=-1.0)  # 0 where mag == 0
+    # |grad I| with numpy (correctly rounded element-wise, so independent of
+    # buffer alignment; cv2.magnitude's SIMD path is not).
+    np.multiply(gc, gc, out=mag)
+    np.multiply(gr, gr, out=alpha)  # alpha is scratch until it is filled below
+    np.add(mag, alpha, out=mag)
+    np.sqrt(mag, out=mag)
+    # numpy's division is correctly rounded whatever the buffer alignment
+    # (cv2.divide with a scale is not: its SIMD and scalar paths differ by an
+    # ulp, which made pooled and fresh output buffers disagree).
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(gt, mag, out=vn)
+    np.negative(vn, out=vn)
     if cv2.countNonZero(mag) < mag.size:
         np.copyto(vn, f32(np.nan), where=mag == 0)
-    # alpha = atan2(gr, gc): cv2.phase (error <= 2e-4 rad) on the grid, exact at edge points below.
-    cv2.phase(gc, gr, alpha)  # [0, 2 pi)
+    # alpha = atan2(gr, gc) only where it is used: at the candidate edge
+    # points (below); NaN elsewhere. (cv2.phase on the whole grid was fast but
+    # its SIMD path depends on buffer alignment, so reused buffers gave results
+    # differing by an ulp: not deterministic.)
+    alpha.fill(np.nan)
     b3 = ws.b3
-    np.greater(alpha, _PI, out=b3)
-    np.subtract(alpha, _TWO_PI, out=alpha, where=b3)
 
     # Edge points.
     if p.min_gradient is None:
@@ -403,14 +413,10 @@ _BAND_CELLS = 16384
 def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
     """Exact angle and corner rejection at the candidate cells ``idx`` (flat, cell grid)."""
     fi = idx + idx // w  # flat index into the (H, W) buffers
-    # Exact angle at the edge points: one correction step on cv2.phase,
-    # alpha = a0 + (g_r cos a0 - g_c sin a0) / (g_c cos a0 + g_r sin a0)
-    # (float64; the step's error is ~|a - a0|^3 / 3, far below float32 rounding).
+    # Angle at the candidate edge points (float64 atan2, as the reference).
     gcs = ws.gc.ravel()[fi].astype(np.float64)
     grs = ws.gr.ravel()[fi].astype(np.float64)
-    a0 = alpha.ravel()[idx].astype(np.float64)
-    ca, sa = np.cos(a0), np.sin(a0)
-    alpha.ravel()[idx] = a0 + (grs * ca - gcs * sa) / (gcs * ca + grs * sa)
+    alpha.ravel()[idx] = np.arctan2(grs, gcs)
     # Eigenvalue ratio of the smoothed structure tensor (float64, as the reference).
     jxx = ws.Gs.ravel()[fi].astype(np.float64)
     jyy = ws.gt.ravel()[fi].astype(np.float64)
