@@ -6,15 +6,64 @@ the parameter, what arrived and what was expected.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 import numpy as np
 
 _FLOAT_DTYPES = (np.float32, np.float64)
 
+#: Largest frame (rows x cols) the pipelines accept, in pixels. Peak working
+#: memory on a float32 triple, beyond the input frames: about 105 bytes per
+#: pixel for :func:`nfdepth.normal_flow.normal_flow` plus
+#: :func:`nfdepth.edges.select_edge_points` (asserted below 128 in
+#: ``tests/test_bad_input.py``), about 130 for
+#: :func:`nfdepth.pipelines.static_stereo_edges` and about 370 for the dense
+#: :func:`nfdepth.stereo.static_stereo` (measured at 4 megapixels), so a
+#: 40-megapixel triple needs about 5 GB (15 GB dense). Override with the
+#: environment variable ``NFDEPTH_MAX_PIXELS`` (a positive number of pixels).
+MAX_PIXELS = 40_000_000
+
+#: Environment variable that overrides :data:`MAX_PIXELS`.
+MAX_PIXELS_ENV = "NFDEPTH_MAX_PIXELS"
+
 
 class NFDepthError(ValueError):
     """Base class of nfdepth's own errors (a ``ValueError``)."""
+
+
+class ImageTooLargeError(NFDepthError):
+    """A frame has more pixels than :func:`max_pixels` allows."""
+
+
+def max_pixels() -> int:
+    """The pixel limit per frame: ``NFDEPTH_MAX_PIXELS`` if set, else :data:`MAX_PIXELS`."""
+    text = os.environ.get(MAX_PIXELS_ENV, "").strip()
+    if not text:
+        return int(MAX_PIXELS)
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not np.isfinite(value) or value < 1:
+        msg = f"{MAX_PIXELS_ENV} must be a positive number of pixels (e.g. 60000000), got {text!r}"
+        raise ValueError(msg)
+    return int(value)
+
+
+def check_frame_size(name: str, shape) -> None:
+    """Refuse a frame of ``shape`` (rows, cols, ...) above :func:`max_pixels`."""
+    if len(shape) < 2:
+        return
+    pixels = int(shape[0]) * int(shape[1])
+    limit = max_pixels()
+    if pixels > limit:
+        msg = (
+            f"{name} has {shape[0]}x{shape[1]} = {pixels / 1e6:.1f} megapixels, above the limit of "
+            f"{limit / 1e6:g} megapixels per frame (working memory is about 130-370 bytes per pixel); "
+            f"downsample the images or raise the limit with the environment variable {MAX_PIXELS_ENV}"
+        )
+        raise ImageTooLargeError(msg)
 
 
 def check_positive_finite(name: str, value) -> float:
@@ -85,9 +134,16 @@ def as_image(name: str, image, dtype=np.float32) -> np.ndarray:
     if arr.shape[0] < 2 or arr.shape[1] < 2:
         msg = f"{name} must be at least 2x2 pixels, got shape {arr.shape}"
         raise ValueError(msg)
-    out = arr.astype(float_dtype(dtype), copy=False)
+    with np.errstate(over="ignore"):  # values beyond float32 become inf: reported below
+        out = arr.astype(float_dtype(dtype), copy=False)
     if not np.all(np.isfinite(out)):
         bad = int(np.count_nonzero(~np.isfinite(out)))
+        if np.issubdtype(arr.dtype, np.floating) and np.all(np.isfinite(arr)):
+            msg = (
+                f"{name} has {bad} pixel(s) beyond the {out.dtype} range (max |value| "
+                f"{float(np.max(np.abs(arr))):.3g}); rescale the intensities or use dtype=float64"
+            )
+            raise ValueError(msg)
         msg = f"{name} contains {bad} non-finite (NaN or inf) pixel(s); expected finite intensities"
         raise ValueError(msg)
     return out
@@ -111,6 +167,8 @@ def as_frames(name: str, frames, count: int | None = None, *, min_count: int = 1
     if len(seq) < min_count:
         msg = f"{name} must hold at least {min_count} frames, got {len(seq)}"
         raise ValueError(msg)
+    for i, f in enumerate(seq):
+        check_frame_size(f"{name}[{i}]", np.shape(f))
     out = [as_image(f"{name}[{i}]", f, dtype) for i, f in enumerate(seq)]
     shapes = {f.shape for f in out}
     if len(shapes) > 1:

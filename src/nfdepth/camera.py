@@ -53,7 +53,7 @@ class PinholeCamera:
         check_positive_finite("focal_px", self.focal_px)
         for name in ("width_px", "height_px"):
             value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < 1:
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
                 msg = f"{name} must be a positive integer, got {value!r}"
                 raise ValueError(msg)
         if self.cx_px is None:
@@ -61,8 +61,14 @@ class PinholeCamera:
         if self.cy_px is None:
             object.__setattr__(self, "cy_px", (self.height_px - 1) / 2.0)
         for name in ("cx_px", "cy_px"):
-            if not np.isfinite(getattr(self, name)):
-                msg = f"{name} must be finite, got {getattr(self, name)!r}"
+            value = getattr(self, name)
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                msg = f"{name} must be a finite number (pixels), got {value!r}"
+                raise TypeError(msg) from None
+            if not np.isfinite(number):
+                msg = f"{name} must be finite, got {value!r}"
                 raise ValueError(msg)
 
     @property

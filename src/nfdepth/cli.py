@@ -12,7 +12,8 @@ code  meaning
 3     an input file could not be read
 4     an output could not be written, or exists (use ``--force``)
 5     data set not found
-130   interrupted (Ctrl-C); no partial output is left behind
+130   interrupted (Ctrl-C, SIGINT); no partial output is left behind
+143   terminated (SIGTERM); no partial output is left behind
 ====  ==========================================================
 """
 
@@ -21,7 +22,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
+import threading
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -35,13 +39,14 @@ EXIT_READ = 3
 EXIT_WRITE = 4
 EXIT_DATA = 5
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
 
 
 #: Modules that add sub-commands: each has ``register(subparsers, CLIError)``
 #: adding its parser with ``set_defaults(func=...)``; ``func(args)`` returns
 #: an exit code and raises ``CLIError(message, code)`` or the library's own
 #: errors, which :func:`main` turns into one line on stderr.
-_PLUGIN_COMMANDS: tuple[str, ...] = ()
+_PLUGIN_COMMANDS: tuple[str, ...] = ("_cli_evaluate", "_cli_rig")
 
 
 class CLIError(Exception):
@@ -50,6 +55,27 @@ class CLIError(Exception):
     def __init__(self, message: str, code: int = EXIT_USAGE):
         super().__init__(message)
         self.code = code
+
+
+class _Terminated(KeyboardInterrupt):
+    """Raised by the SIGTERM handler so that clean-up (temporary files) runs."""
+
+
+def _on_sigterm(signum, frame):  # pragma: no cover - exercised in a subprocess test
+    raise _Terminated()
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    text = " ".join(str(message).split())
+    print(f"nfdepth: warning: {text}", file=sys.stderr if file is None else file)
+
+
+def _check_out_dir(path: str, what: str = "--out") -> Path:
+    """An output folder: it may exist as a folder or not exist; never a file."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"{what} '{out}' exists and is not a directory; expected a folder for the output files", EXIT_WRITE)
+    return out
 
 
 class _Parser(argparse.ArgumentParser):
@@ -142,6 +168,10 @@ def _cmd_reproduce(args) -> int:
 
     if args.noise < 0 or not np.isfinite(args.noise):
         raise CLIError(f"--noise must be a finite number >= 0, got {args.noise}")
+    if args.json:
+        _check_output(args.json, force=True, exts=(".json",), what="--json")
+    if args.out:
+        _check_out_dir(args.out)
     names = EXPERIMENTS if not args.only else tuple(args.only)
     if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px <= 0):
         raise CLIError(f"--sigma-px must be a positive number, got {args.sigma_px}")
@@ -182,7 +212,7 @@ def _cmd_demo(args) -> int:
     from .io import atomic_write, depth_to_points, write_array, write_ply
     from .stereo import static_stereo
 
-    out = Path(args.out)
+    out = _check_out_dir(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print("nfdepth demo: the paper's pyramid, dynamic stereo (experiment 1) and static stereo")
     results = {}
@@ -242,7 +272,8 @@ def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--ou
         raise CLIError(f"{what} '{out}' exists; use --force to overwrite it", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        raise CLIError(f"{what} '{out}': directory '{parent}' does not exist", EXIT_WRITE)
+        problem = "is not a directory" if parent.exists() else "does not exist"
+        raise CLIError(f"{what} '{out}': directory '{parent}' {problem}", EXIT_WRITE)
     return out
 
 
@@ -260,6 +291,20 @@ def _cmd_stereo(args) -> int:
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
+    rig = None
+    if args.rig:
+        from .rig import load_rig, stereo_options_from_rig
+
+        rig = load_rig(args.rig)
+        opts = stereo_options_from_rig(rig)
+        for key in ("focal_px", "baseline", "axis", "positions"):
+            given = getattr(args, key)
+            if key == "axis" and given == "x":
+                given = None  # the parser's default: the rig decides
+            if given is not None and opts.get(key) is not None and given != opts[key]:
+                raise CLIError(f"--{key.replace('_', '-')} {given} contradicts the rig file's {key} = {opts[key]}")
+            if given is None and opts.get(key) is not None:
+                setattr(args, key, opts[key])
     focal = _positive("--focal-px", args.focal_px)
     baseline = _positive("--baseline", args.baseline)
     if (focal is None) != (baseline is None):
@@ -283,6 +328,8 @@ def _cmd_stereo(args) -> int:
     if len(shapes) > 1:
         listed = ", ".join(f"{Path(p).name} {v.shape[1]}x{v.shape[0]}" for p, v in zip(args.views, views))
         raise CLIError(f"all views must have the same size, got {listed}")
+    if rig is not None:
+        rig.check_image_shape(views[0].shape)
     options = {}
     if args.sigma_px is not None:
         options["sigma_px"] = args.sigma_px
@@ -390,6 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ply", metavar="FILE", help="also write a coloured point cloud (needs --focal-px, --baseline)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
     p.add_argument("--levels", type=int, help="pyramid levels (default: from the image size)")
+    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions (docs/rig-format.md)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
 
@@ -417,6 +465,20 @@ def main(argv=None) -> int:
     """Entry point of the ``nfdepth`` command; returns the exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
     debug = "--debug" in argv
+    previous_sigterm = None
+    if threading.current_thread() is threading.main_thread():
+        previous_sigterm = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            warnings.showwarning = _one_line_warning
+            return _main(argv, debug)
+    finally:
+        if previous_sigterm is not None:
+            signal.signal(signal.SIGTERM, previous_sigterm)
+
+
+def _main(argv, debug: bool) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -426,13 +488,21 @@ def main(argv=None) -> int:
         return int(args.func(args))
     except SystemExit as exc:  # --help / --version
         return int(exc.code or 0)
-    except KeyboardInterrupt:
-        print("nfdepth: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, _Terminated):
+            print("nfdepth: terminated (SIGTERM); no partial output written", file=sys.stderr)
+            return EXIT_TERMINATED
+        print("nfdepth: interrupted; no partial output written", file=sys.stderr)
         return EXIT_INTERRUPTED
     except CLIError as exc:
         if debug:
             raise
-        print(f"nfdepth: error: {exc}" if not str(exc).startswith("nfdepth") else f"{exc}".replace("nfdepth", "nfdepth: error:", 1), file=sys.stderr)
+        text = " ".join(str(exc).split())
+        for prefix in ("nfdepth: ", "nfdepth "):  # argparse's "PROG: message"
+            if text.startswith(prefix):
+                text = text[len(prefix) :]
+                break
+        print(f"nfdepth: error: {text}", file=sys.stderr)
         return exc.code
     except Exception as exc:  # noqa: BLE001 - the CLI's single error boundary
         if debug:

@@ -132,6 +132,12 @@ def solve_inverse_depth(
     -------
     InverseDepth
     """
+    if not isinstance(camera, PinholeCamera):
+        msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
+        raise TypeError(msg)
+    if not isinstance(relative_motion, RigidMotion):
+        msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
+        raise TypeError(msg)
     min_cos = check_nonnegative_finite("min_cos", min_cos)
     if min_cos > 1:
         msg = f"min_cos must be within [0, 1], got {min_cos!r}"
@@ -171,11 +177,23 @@ def solve_inverse_depth(
     return InverseDepth(rho, rho_std, reason, np.asarray(b, dtype=float))
 
 
+def _nonzero_translation(name: str, value) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be a non-zero finite translation, got {value!r}"
+        raise TypeError(msg) from None
+    if not np.isfinite(number) or number == 0:
+        msg = f"{name} must be a non-zero finite translation, got {value!r}"
+        raise ValueError(msg)
+    return number
+
+
 def _special_case(numerator, delta_vn):
     dvn = np.asarray(delta_vn, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.asarray(numerator, dtype=float) / dvn
-    return np.where(z > 0, z, np.nan)
+    return np.where((z > 0) & np.isfinite(z), z, np.nan)  # dVn = 0 (at infinity) is no depth either
 
 
 def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
@@ -185,26 +203,23 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
     ``dVn`` in px per unit time); NaN where ``Z`` would not be positive.
     """
     f = check_positive_finite("focal_px", focal_px)
-    if not np.isfinite(delta_vx) or delta_vx == 0:
-        msg = f"delta_vx must be a non-zero finite translation, got {delta_vx!r}"
-        raise ValueError(msg)
+    delta_vx = _nonzero_translation("delta_vx", delta_vx)
     return _special_case(f * delta_vx * np.cos(alpha), delta_vn)
 
 
 def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
     """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``."""
     f = check_positive_finite("focal_px", focal_px)
-    if not np.isfinite(delta_vy) or delta_vy == 0:
-        msg = f"delta_vy must be a non-zero finite translation, got {delta_vy!r}"
-        raise ValueError(msg)
+    delta_vy = _nonzero_translation("delta_vy", delta_vy)
     return _special_case(f * delta_vy * np.sin(alpha), delta_vn)
 
 
 def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float):
     """Depth for a pure z translation: ``Z = -f dVz (x cos a + y sin a) / dVn``."""
-    if not np.isfinite(delta_vz) or delta_vz == 0:
-        msg = f"delta_vz must be a non-zero finite translation, got {delta_vz!r}"
-        raise ValueError(msg)
+    if not isinstance(camera, PinholeCamera):
+        msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
+        raise TypeError(msg)
+    delta_vz = _nonzero_translation("delta_vz", delta_vz)
     x, y = camera.to_normalized(rows, cols)
     return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
 

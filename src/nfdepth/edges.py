@@ -50,7 +50,12 @@ def laplacian_zero_crossings(smoothed: np.ndarray) -> np.ndarray:
         corner pixels have Laplacian values of both signs.
     """
     img = np.asarray(smoothed)
-    lap = cv2.Laplacian(img, -1 if img.dtype in (np.float32, np.float64) else cv2.CV_64F, ksize=1, borderType=cv2.BORDER_REFLECT)
+    if img.ndim != 2 or min(img.shape) < 2 or not (np.issubdtype(img.dtype, np.number) or img.dtype == bool) or np.iscomplexobj(img):
+        msg = f"smoothed must be a real 2-D image of at least 2x2 pixels, got dtype {img.dtype}, shape {img.shape}"
+        raise ValueError(msg)
+    if img.dtype not in (np.float32, np.float64):
+        img = img.astype(np.float64)  # OpenCV's Laplacian takes no int32/int64/bool input
+    lap = cv2.Laplacian(img, -1, ksize=1, borderType=cv2.BORDER_REFLECT)
     corners = np.stack([lap[:-1, :-1], lap[:-1, 1:], lap[1:, :-1], lap[1:, 1:]])
     return (corners.max(axis=0) > 0) & (corners.min(axis=0) < 0)
 
@@ -135,6 +140,13 @@ def select_edge_points(
         Cells this close to the image border are dropped (their smoothing
         saw the reflected border).
     """
+    if not isinstance(field, GradientField):
+        msg = f"field must be a nfdepth.GradientField (from normal_flow), got {type(field).__name__}"
+        raise TypeError(msg)
+    smoothed_middle = np.asarray(smoothed_middle)
+    if isinstance(border_px, (bool, np.bool_)) or not isinstance(border_px, (int, np.integer)) or border_px < 0:
+        msg = f"border_px must be an int >= 0, got {border_px!r}"
+        raise ValueError(msg)
     mag = field.magnitude
     if smoothed_middle.shape != (mag.shape[0] + 1, mag.shape[1] + 1):
         msg = f"smoothed_middle must have shape {(mag.shape[0] + 1, mag.shape[1] + 1)}, got {smoothed_middle.shape}"

@@ -198,9 +198,12 @@ def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
     if ext in (".jpg", ".jpeg") and not data.rstrip(b"\0").endswith(b"\xff\xd9"):
         raise _read_error(path, "truncated JPEG (no end-of-image marker)")
     previous = None
-    try:  # keep OpenCV's own log quiet; the error below says what went wrong
-        previous = cv2.setLogLevel(0)
-    except Exception:  # pragma: no cover - old OpenCV without setLogLevel
+    # keep OpenCV's own log quiet; the error below says what went wrong
+    # (cv2.setLogLevel in OpenCV 4, cv2.utils.logging.setLogLevel in OpenCV 5)
+    set_level = getattr(cv2, "setLogLevel", None) or getattr(getattr(getattr(cv2, "utils", None), "logging", None), "setLogLevel", None)
+    try:
+        previous = set_level(0) if set_level is not None else None
+    except Exception:  # pragma: no cover - an OpenCV without either
         previous = None
     try:
         arr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
@@ -208,7 +211,7 @@ def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
         raise _read_error(path, f"OpenCV could not decode it ({exc})") from None
     finally:
         if previous is not None:
-            cv2.setLogLevel(previous)
+            set_level(previous)
     if arr is None:
         raise _read_error(path, f"OpenCV could not decode it as {ext[1:].upper()} (broken or truncated file?)")
     if arr.ndim == 3 and arr.shape[-1] == 3:
@@ -219,13 +222,22 @@ def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
 
 
 def _decode_tiff(path: Path) -> np.ndarray:
+    import logging
+
     import tifffile
 
+    log = logging.getLogger("tifffile")  # it logs broken offsets; the error below says it in one line
+    level = log.level
+    log.setLevel(logging.CRITICAL + 1)
     try:
         arr = tifffile.imread(path)
     except Exception as exc:  # tifffile raises several types on broken files
         raise _read_error(path, f"not a readable TIFF ({type(exc).__name__}: {exc})") from None
+    finally:
+        log.setLevel(level)
     arr = np.asarray(arr)
+    if arr.size == 0:
+        raise _read_error(path, f"not a readable TIFF (no image data; array of shape {arr.shape})")
     if arr.ndim == 3 and arr.shape[0] in (3, 4) and arr.shape[-1] not in (1, 2, 3, 4):
         arr = np.moveaxis(arr, 0, -1)  # planar (C, H, W) -> (H, W, C)
     return arr
@@ -276,6 +288,8 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
     out_dtype = None if dtype is None else float_dtype(dtype)
     path = Path(path)
     ext = path.suffix.lower()
+    if path.is_dir():
+        raise _read_error(path, "it is a directory, not a file")
     if ext not in READ_EXTENSIONS:
         if not path.exists():
             raise _read_error(path, "no such file")

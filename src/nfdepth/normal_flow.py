@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite, float_dtype
 
 __all__ = [
     "STENCILS",
@@ -187,7 +187,15 @@ def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "m
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
         raise ValueError(msg)
     dt = check_positive_finite("frame_interval", frame_interval)
+    if not isinstance(smoothed_frames, (list, tuple, np.ndarray)):
+        msg = f"smoothed_frames must be a sequence of 2 or 3 2-D arrays, got {type(smoothed_frames).__name__}"
+        raise TypeError(msg)
     n = len(smoothed_frames)
+    if n in (2, 3):
+        shapes = [np.shape(f) for f in smoothed_frames]
+        if any(len(sh) != 2 or min(sh) < 2 for sh in shapes) or len(set(shapes)) > 1:
+            msg = f"smoothed_frames must be 2-D arrays of one shape, at least 2x2, got shapes {shapes}"
+            raise ValueError(msg)
     matched = stencil == "matched"
     if n == 3:
         weights = _TEMPORAL_WEIGHTS[stencil]
@@ -269,8 +277,8 @@ def estimate_noise_std(image: np.ndarray) -> float:
     distribution, ignores the edges that inflate the plain mean. Returns 0
     for noise-free piecewise-constant images.
     """
-    img = np.asarray(image, dtype=np.float64)
-    if img.ndim != 2 or min(img.shape) < 3:
+    img = as_image("image", image, np.float64)
+    if min(img.shape) < 3:
         msg = f"image must be 2-D and at least 3x3, got shape {img.shape}"
         raise ValueError(msg)
     kernel = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])

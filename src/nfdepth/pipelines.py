@@ -16,6 +16,7 @@ the direction of travel.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,6 +28,13 @@ from .edges import EdgeSelection, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
 
 __all__ = ["EdgeDepth", "dynamic_stereo", "static_stereo_edges"]
+
+#: Warning text when the reference image has no edge points at all.
+TEXTURELESS_WARNING = "no edge points: the images are textureless"
+
+#: Fewest determinable edge points before a majority with negative inverse
+#: depth is reported as a likely ordering/sign mistake.
+_ORDER_CHECK_MIN_POINTS = 10
 
 
 @dataclass(frozen=True)
@@ -129,10 +137,18 @@ def _edge_result(
     edge_options,
     min_cos,
     max_rel_std=None,
+    order_hint: str = "",
 ):
     selection = select_edge_points(shared, smoothed_middle, **edge_options)
     rows_grid, cols_grid = GradientField.cell_centres(shared.shape)
     m = selection.mask
+    if not m.any():
+        warnings.warn(
+            f"{TEXTURELESS_WARNING} (no strong zero-crossing edge in the reference image of shape "
+            f"{smoothed_middle.shape}); the result is empty",
+            UserWarning,
+            stacklevel=3,
+        )
     rows, cols = rows_grid[m], cols_grid[m]
     alpha = shared.alpha[m]
     inv = solve_inverse_depth(
@@ -146,6 +162,7 @@ def _edge_result(
         min_cos=min_cos,
         max_rel_std=max_rel_std,
     )
+    _warn_if_mostly_behind(inv, order_hint)
     return EdgeDepth(
         rows=rows,
         cols=cols,
@@ -160,6 +177,26 @@ def _edge_result(
         flows=flows,
         noise_std=noise,
     )
+
+
+def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str) -> None:
+    """Warn when most determinable points come out behind the camera (a sign mistake)."""
+    reason = inv.reason
+    behind = int(np.count_nonzero(reason == Reason.NOT_POSITIVE))
+    ahead = int(np.count_nonzero(reason == Reason.OK))
+    if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:
+        warnings.warn(
+            f"{behind} of {behind + ahead} determinable edge points have a negative inverse depth "
+            f"(behind the camera; given NaN with reason NOT_POSITIVE); {order_hint}",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
+def _check_min_size(name: str, shape) -> None:
+    if min(shape) < 3:
+        msg = f"{name} must be at least 3x3 pixels, got shape {shape}"
+        raise ValueError(msg)
 
 
 def _check_camera(camera, shape):
@@ -223,10 +260,17 @@ def dynamic_stereo(
     """
     dt = float_dtype(dtype)
     frames = as_frames("frames", frames, 5, dtype=dt)
+    _check_min_size("frames", frames[0].shape)
     _check_camera(camera, frames[0].shape)
     if not isinstance(relative_motion, RigidMotion):
         msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
         raise TypeError(msg)
+    if relative_motion.is_pure_rotation:
+        msg = (
+            f"relative_motion has no translation (translation={relative_motion.translation.tolist()}, "
+            "a pure rotation): depth is undeterminable; the cameras need a non-zero relative translation"
+        )
+        raise ValueError(msg)
     step = check_positive_finite("frame_interval", frame_interval)
     sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
     noise = _noise_level(noise_std, frames)
@@ -262,6 +306,7 @@ def dynamic_stereo(
         edge_options=edge_options,
         min_cos=min_cos,
         max_rel_std=max_rel_std,
+        order_hint="are the frames in time order I1..I5, and is relative_motion's sign right (V = -T for a camera moving by T)?",
     )
 
 
@@ -313,6 +358,7 @@ def static_stereo_edges(
     """
     dt = float_dtype(dtype)
     views = as_frames("views", views, min_count=3, dtype=dt)
+    _check_min_size("views", views[0].shape)
     _check_camera(camera, views[0].shape)
     baseline = check_positive_finite("baseline", baseline)
     direction = np.asarray(direction, dtype=float)
@@ -321,12 +367,18 @@ def static_stereo_edges(
         raise ValueError(msg)
     direction = direction / np.linalg.norm(direction)
     n = len(views)
+    if reference is not None and (isinstance(reference, bool) or not isinstance(reference, (int, np.integer))):
+        msg = f"reference must be an int view index (1..{n - 2}) or None, got {reference!r}"
+        raise TypeError(msg)
     ref = n // 2 if reference is None else int(reference)
     if not 1 <= ref <= n - 2:
         msg = f"reference must index a view with a neighbour on each side (1..{n - 2}), got {reference!r}"
         raise ValueError(msg)
     span = min(ref, n - 1 - ref)
     if max_span is not None:
+        if isinstance(max_span, bool) or not isinstance(max_span, (int, np.integer)):
+            msg = f"max_span must be an int >= 1 or None, got {max_span!r}"
+            raise TypeError(msg)
         if int(max_span) < 1:
             msg = f"max_span must be >= 1, got {max_span!r}"
             raise ValueError(msg)
@@ -367,6 +419,7 @@ def static_stereo_edges(
         edge_options=edge_options,
         min_cos=min_cos,
         max_rel_std=max_rel_std,
+        order_hint="are the views in the wrong order? The camera must move toward `direction` from the first view to the last",
     )
 
 

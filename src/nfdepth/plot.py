@@ -17,6 +17,7 @@ import os
 import tempfile
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -138,17 +139,21 @@ def yz_projection_panel(points, *, true_points=None, title: str) -> Figure:
 
 
 def colormap_panel(array, *, title: str, unit: str, cmap: str = "turbo", vmin=None, vmax=None) -> Figure:
-    """A colour map with a colour bar in ``unit`` (NaN drawn black)."""
+    """A colour map with a colour bar in ``unit`` (NaN drawn black).
+
+    ``cmap`` is a matplotlib colour-map name or a Colormap object.
+    """
     arr = np.asarray(array, dtype=float)
     fig = _figure(5.5, 4.0)
     ax = fig.add_subplot()
-    ax.set_facecolor("black")
+    base = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+    colours = base.with_extremes(bad="black")
     finite = arr[np.isfinite(arr)]
     if vmin is None:
         vmin = float(np.percentile(finite, 1)) if finite.size else 0.0
     if vmax is None:
         vmax = float(np.percentile(finite, 99)) if finite.size else 1.0
-    im = ax.imshow(np.ma.masked_invalid(arr), cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+    im = ax.imshow(np.ma.masked_invalid(arr), cmap=colours, vmin=vmin, vmax=vmax, interpolation="nearest")
     ax.set_title(title)
     ax.set_axis_off()
     fig.colorbar(im, ax=ax, label=unit, shrink=0.85)

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_vector3, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_vector3, check_frame_size, check_nonnegative_finite, check_positive_finite, float_dtype
 from .camera import PinholeCamera, RigidMotion
 
 __all__ = [
@@ -703,6 +703,7 @@ def render(
     """
     _check_type("polyhedron", polyhedron, ConvexPolyhedron, allow_none=False)
     _check_camera(camera)
+    check_frame_size("camera image", camera.shape)
     std = _check_noise(noise_std, rng)
     bg = _check_time("background", background)
     dt = float_dtype(dtype)

@@ -1,0 +1,117 @@
+"""``nfdepth evaluate``: nfdepth and its peers against the ground truth of the real data sets.
+
+A plug-in of :mod:`nfdepth.cli` (listed in ``_PLUGIN_COMMANDS``): ``register``
+adds the sub-command to the parser.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .evaluate import DEFAULT_METHODS, METHODS
+
+EXIT_OK = 0
+EXIT_USAGE = 2
+EXIT_WRITE = 4
+
+
+def register(sub, CLIError) -> None:
+    """Add ``evaluate`` to the sub-parsers ``sub``; errors are raised as ``CLIError``."""
+    p = sub.add_parser(
+        "evaluate",
+        help="nfdepth vs SGBM and Waxman-Sinha (relative optical flow) against ground truth",
+        description=(
+            "Run nfdepth's static stereo and its peers on real scenes with ground truth and print, per scene, "
+            "points, density, median and p90 relative disparity error, bad >1 px and >0.5 px, MAE and runtime: "
+            "nfdepth at its edge points and dense, each peer at the same edge points and dense."
+        ),
+    )
+    p.add_argument(
+        "dataset",
+        metavar="DATASET",
+        help="a scene (tsukuba, teddy, middlebury2005/Art, motorcycle), a group (middlebury2005, all) or a data folder",
+    )
+    p.add_argument("--data", metavar="DIR", help="the data folder (default: NFDEPTH_DATA or ../shared/data)")
+    p.add_argument("--views", default="all", metavar="three|all", help="views to use: all (default) or three around the reference")
+    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(DEFAULT_METHODS), metavar="M",
+                   help=f"methods (default: {' '.join(DEFAULT_METHODS)}; choices: {', '.join(METHODS)})")
+    p.add_argument("--downsample", type=int, default=1, metavar="K", help="area-downsample by K first (default 1: full size)")
+    p.add_argument("--json", metavar="FILE", help="write the results as JSON (a list, one entry per scene)")
+    p.add_argument("--maps", metavar="DIR", help="write |error| maps (PNG, one per scene and method) here")
+
+    def run(args) -> int:
+        return _cmd_evaluate(args, CLIError)
+
+    p.set_defaults(func=run)
+
+
+def _check_json_path(path: str, CLIError) -> Path:
+    out = Path(path)
+    if out.suffix.lower() != ".json":
+        raise CLIError(f"--json '{out}' must end in .json", EXIT_USAGE)
+    if out.is_dir():
+        raise CLIError(f"--json '{out}' is a directory; expected a file path", EXIT_WRITE)
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise CLIError(f"--json '{out}': directory '{parent}' does not exist", EXIT_WRITE)
+    return out
+
+
+def _fmt_table(res) -> str:
+    def pct(x, digits=1):
+        return "     -" if x is None or x != x else f"{100 * x:5.{digits}f}%"
+
+    lines = [
+        f"{res['scene']}: {res['view_count']} views {res['views']}, reference view {res['reference_index']}, "
+        f"{res['shape'][1]}x{res['shape'][0]} px" + (f" (downsampled {res['downsample']}x)" if res["downsample"] > 1 else "")
+        + f", {res['truth_points']} ground-truth pixels",
+        f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} {'runtime':>8}",
+    ]
+    for method, entry in res["methods"].items():
+        for part in ("edges", "dense"):
+            e = entry.get(part)
+            if e is None:
+                continue
+            label = f"{method} ({'edges' if method == 'nfdepth' else 'at nfdepth edges'})" if part == "edges" else f"{method} (dense)"
+            lines.append(
+                f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e['p90_rel'], 2):>7} "
+                f"{pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} {entry['runtime_s']:>7.3f}s"
+            )
+    return "\n".join(lines)
+
+
+def _cmd_evaluate(args, CLIError) -> int:
+    from . import datasets
+    from .evaluate import error_map_png, evaluate_scene, resolve_dataset, select_views, to_jsonable
+    from .io import atomic_write
+
+    views = args.views.strip().lower()
+    if views not in ("all", "three"):
+        raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
+    if args.downsample < 1:
+        raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
+    js = _check_json_path(args.json, CLIError) if args.json else None
+    maps = Path(args.maps) if args.maps else None
+    if maps is not None and maps.exists() and not maps.is_dir():
+        raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)
+    select_views(3, 1, views)
+    root, names = resolve_dataset(args.dataset, args.data)
+    results = []
+    for name in names:
+        scene = datasets.load_scene(name, root)
+        res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None)
+        print(_fmt_table(res), flush=True)
+        if maps is not None:
+            maps.mkdir(parents=True, exist_ok=True)
+            stem = f"{res['scene'].replace('/', '_')}_{res['view_count']}views"
+            for method, disp in res["maps"].items():
+                error_map_png(maps / f"{stem}_{method}.png", disp, res["truth"], title=f"{res['scene']} {method}: |d - d_true|")
+        results.append(to_jsonable(res))
+    if js is not None:
+        text = json.dumps(results, indent=2)
+        atomic_write(js, lambda fh: fh.write(text.encode()), force=True)
+        print(f"wrote {js}")
+    if maps is not None:
+        print(f"wrote error maps to {maps}/")
+    return EXIT_OK

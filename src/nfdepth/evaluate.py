@@ -1,0 +1,414 @@
+"""nfdepth against ground truth and against its peers on the real data sets.
+
+:func:`disparity_errors` scores one disparity map; :func:`evaluate_scene`
+runs nfdepth's :func:`nfdepth.stereo.static_stereo` and the peers of
+:mod:`nfdepth.baselines` on one :class:`nfdepth.datasets.MultiViewScene`;
+:func:`evaluate_dataset` does it for several scenes; :func:`render_markdown`
+turns the results into a table and :func:`error_map_png` draws ``|error|``.
+
+What is compared
+----------------
+* ``nfdepth`` **edges**: the paper's sparse output, the pixels of
+  ``StereoResult.edge_mask`` with a finite disparity; ``density`` is their
+  share of the ground-truth pixels.
+* ``nfdepth`` **dense**: every finite pixel of ``StereoResult.disparity``.
+* each peer **at nfdepth's edge points** (the same pixels; ``density`` is the
+  share of those points where the peer gives a value) and **dense**.
+
+Peers (see :mod:`nfdepth.baselines`): ``sgbm`` (OpenCV semi-global matching
+on the reference and its neighbour, one step of baseline; ``numDisparities``
+from the ground truth's largest disparity, as a user who knows the scene's
+depth range would set it), ``bm`` (OpenCV block matching, same pair),
+``waxman_sinha`` (relative optical flow, paper eq. 2, DIS flow to every view,
+least squares) and ``waxman_sinha_farneback`` (the same with Farnebäck flow).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "METHODS",
+    "DEFAULT_METHODS",
+    "disparity_errors",
+    "select_views",
+    "evaluate_scene",
+    "resolve_dataset",
+    "evaluate_dataset",
+    "render_markdown",
+    "error_map_png",
+]
+
+METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")
+DEFAULT_METHODS = ("nfdepth", "sgbm", "waxman_sinha")
+_ERROR_KEYS = ("points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px")
+
+
+# ------------------------------------------------------------------ one map
+
+
+def disparity_errors(estimate, truth, *, mask=None) -> dict:
+    """Error figures of a disparity map against the ground truth.
+
+    Parameters
+    ----------
+    estimate, truth : array_like, shape (H, W)
+        Disparity (px); NaN (or inf) where unknown.
+    mask : array_like of bool, shape (H, W), optional
+        Only these pixels count (also for ``density``).
+
+    Returns
+    -------
+    dict
+        ``points``: pixels where both are finite (and in ``mask``);
+        ``truth_points``: pixels where the truth is finite (and in ``mask``);
+        ``density``: ``points / truth_points``;
+        ``median_rel``, ``p90_rel``: median and 90th percentile of
+        ``|d - d_true| / |d_true|`` (pixels with ``d_true == 0`` left out);
+        ``bad_1px``, ``bad_0_5px``: fraction of points with
+        ``|d - d_true| > 1`` / ``> 0.5`` px; ``mae_px``: mean ``|d - d_true|``.
+        Figures of an empty set are NaN (``density`` too when the truth is
+        empty).
+    """
+    est = np.asarray(estimate, dtype=np.float64)
+    tru = np.asarray(truth, dtype=np.float64)
+    if est.shape != tru.shape:
+        msg = f"estimate and truth must have the same shape, got {est.shape} and {tru.shape}"
+        raise ValueError(msg)
+    has_truth = np.isfinite(tru)
+    if mask is not None:
+        m = np.asarray(mask)
+        if m.shape != tru.shape:
+            msg = f"mask must have the shape of truth {tru.shape}, got {m.shape}"
+            raise ValueError(msg)
+        has_truth &= m.astype(bool)
+    both = has_truth & np.isfinite(est)
+    n_truth = int(has_truth.sum())
+    n = int(both.sum())
+    out = {"points": n, "truth_points": n_truth, "density": n / n_truth if n_truth else math.nan}
+    if n == 0:
+        out.update(median_rel=math.nan, p90_rel=math.nan, bad_1px=math.nan, bad_0_5px=math.nan, mae_px=math.nan)
+        return out
+    err = np.abs(est[both] - tru[both])
+    t = np.abs(tru[both])
+    rel = err[t > 0] / t[t > 0]
+    out["median_rel"] = float(np.median(rel)) if rel.size else math.nan
+    out["p90_rel"] = float(np.percentile(rel, 90)) if rel.size else math.nan
+    out["bad_1px"] = float(np.mean(err > 1.0))
+    out["bad_0_5px"] = float(np.mean(err > 0.5))
+    out["mae_px"] = float(np.mean(err))
+    return out
+
+
+# ------------------------------------------------------------------ one scene
+
+
+def select_views(n_views: int, reference: int, views="all") -> list:
+    """Indices of the views to use.
+
+    ``"all"``: every view. ``"three"``: ``reference - 1, reference,
+    reference + 1`` when both exist, else the reference and its next two (or,
+    at the end of the row, its previous two); with fewer than three views,
+    all of them. A sequence of indices is returned as a list (checked later
+    by :func:`nfdepth.datasets.view_subset`).
+    """
+    if isinstance(views, str):
+        key = views.strip().lower()
+        if key == "all":
+            return list(range(n_views))
+        if key == "three":
+            if n_views <= 3:
+                return list(range(n_views))
+            if 0 < reference < n_views - 1:
+                return [reference - 1, reference, reference + 1]
+            if reference == 0:
+                return [0, 1, 2]
+            return [reference - 2, reference - 1, reference]
+        msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
+        raise ValueError(msg)
+    try:
+        return [int(i) for i in views]
+    except (TypeError, ValueError):
+        msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
+        raise ValueError(msg) from None
+
+
+def _check_methods(methods) -> tuple:
+    if isinstance(methods, str):
+        methods = (methods,)
+    methods = tuple(methods)
+    bad = [m for m in methods if m not in METHODS]
+    if bad or not methods:
+        msg = f"methods must be one or more of {', '.join(METHODS)}, got {', '.join(map(str, bad)) or 'none'}"
+        raise ValueError(msg)
+    return tuple(dict.fromkeys(methods))
+
+
+def _run_peer(method: str, scene, max_disparity):
+    from . import baselines
+
+    if method in ("sgbm", "bm"):
+        return baselines.pair_disparity_at_reference(
+            scene.views, reference=scene.reference_index, method=method, max_disparity=max_disparity
+        )
+    flow = "farneback" if method == "waxman_sinha_farneback" else "dis"
+    return baselines.waxman_sinha_disparity(scene.views, reference=scene.reference_index, method=flow)
+
+
+def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: int = 1, keep_maps: bool = False, stereo_options=None) -> dict:
+    """Run nfdepth and its peers on one scene and score them against the truth.
+
+    Parameters
+    ----------
+    scene : MultiViewScene or str
+        A loaded scene or a name for :func:`nfdepth.datasets.load_scene`.
+    views : "all", "three" or sequence of int
+        Which views to use (see :func:`select_views`); every method gets the
+        same ones (the two-view matchers use the reference and its nearest
+        neighbour among them).
+    methods : sequence of str
+        Any of :data:`METHODS`. Peers are scored at nfdepth's edge points only
+        when ``"nfdepth"`` is among them.
+    downsample : int
+        Area-downsample the scene first (:func:`nfdepth.datasets.downsample_scene`).
+    keep_maps : bool
+        Also return the disparity maps (``"maps"``: method -> ndarray,
+        ``"truth"``, ``"edge_points"``); not JSON-serialisable.
+    stereo_options : dict, optional
+        Extra keyword arguments for :func:`nfdepth.stereo.static_stereo`.
+
+    Returns
+    -------
+    dict
+        ``scene``, ``views`` (indices into the scene's row), ``view_count``,
+        ``reference_index`` (into the row), ``downsample``, ``shape``,
+        ``truth_points`` and ``methods``: method -> ``{"runtime_s",
+        "dense": errors, "edges": errors or None}`` (errors as
+        :func:`disparity_errors`).
+    """
+    from . import datasets
+    from .stereo import static_stereo
+
+    methods = _check_methods(methods)
+    if isinstance(scene, str):
+        scene = datasets.load_scene(scene)
+    if not isinstance(scene, datasets.MultiViewScene):
+        msg = f"scene must be a MultiViewScene or a scene name, got {type(scene).__name__}"
+        raise TypeError(msg)
+    k = int(downsample)
+    if isinstance(downsample, bool) or k != downsample or k < 1:
+        msg = f"downsample must be a positive integer, got {downsample!r}"
+        raise ValueError(msg)
+    full_ref = scene.reference_index
+    idx = select_views(len(scene.views), full_ref, views)
+    sub = datasets.view_subset(scene, idx) if idx != list(range(len(scene.views))) else scene
+    if k > 1:
+        sub = datasets.downsample_scene(sub, k)
+    truth = sub.disparity
+    max_disp = float(np.nanmax(truth)) if np.any(np.isfinite(truth)) else None
+    out = {
+        "scene": scene.name,
+        "views": idx,
+        "view_count": len(idx),
+        "reference_index": full_ref,
+        "downsample": k,
+        "shape": list(sub.shape),
+        "truth_points": int(np.isfinite(truth).sum()),
+        "methods": {},
+    }
+    maps = {}
+    edge_points = None
+    if "nfdepth" in methods:
+        res = static_stereo(sub.views, reference=sub.reference_index, **(stereo_options or {}))
+        d = np.asarray(res.disparity, dtype=np.float32)
+        edge_points = np.asarray(res.edge_mask, bool) & np.isfinite(d)
+        out["methods"]["nfdepth"] = {
+            "runtime_s": float(res.runtime_s),
+            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth),
+            "dense": disparity_errors(d, truth),
+        }
+        maps["nfdepth"] = d
+    for m in methods:
+        if m == "nfdepth":
+            continue
+        r = _run_peer(m, sub, max_disp)
+        out["methods"][m] = {
+            "runtime_s": float(r.runtime_s),
+            "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points),
+            "dense": disparity_errors(r.disparity, truth),
+        }
+        maps[m] = r.disparity
+    if keep_maps:
+        out["maps"] = maps
+        out["truth"] = truth
+        out["edge_points"] = edge_points
+    return out
+
+
+# ------------------------------------------------------------------ many scenes
+
+
+def _known_scene(name: str):
+    from .datasets import _SCENE_FILES, MIDDLEBURY2005_SCENES
+
+    key = name.strip().lower()
+    aliases = {n.lower(): n for n in _SCENE_FILES}
+    aliases.update({"middlebury2003-teddy": "teddy", "middlebury2003/teddy": "teddy", "skimage-motorcycle": "motorcycle"})
+    aliases.update({s.lower(): f"middlebury2005/{s}" for s in MIDDLEBURY2005_SCENES})
+    return aliases.get(key)
+
+
+def resolve_dataset(dataset, data=None) -> tuple:
+    """Turn a dataset argument into ``(root, [scene names])``.
+
+    ``dataset`` is a scene name (``"tsukuba"``, ``"teddy"``,
+    ``"middlebury2005/Art"`` or just ``"Art"``, ``"motorcycle"``), a group
+    (``"middlebury2005"``: its five scenes; ``"all"``: every scene present),
+    a sequence of names, or a folder: a data root (every scene present), a
+    set's folder (``.../tsukuba``, ``.../middlebury2005``) or a scene's
+    (``.../middlebury2005/Art``).
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the known ones).
+    DataNotFoundError
+        No data root.
+    """
+    from . import datasets
+
+    if not isinstance(dataset, (str, Path)):
+        names = []
+        for item in dataset:
+            root, sub = resolve_dataset(item, data)
+            names.extend(sub)
+        return datasets.data_root(data), list(dict.fromkeys(names))
+    text = str(dataset).strip()
+    key = text.lower().rstrip("/")
+    if key == "all":
+        root = datasets.data_root(data)
+        names = datasets.list_scenes(root)
+        if not names:
+            raise datasets.DataNotFoundError(f"no complete scene under data folder '{root}'")
+        return root, names
+    if key == "middlebury2005":
+        return datasets.data_root(data), [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES]
+    known = _known_scene(key)
+    if known is not None:
+        return datasets.data_root(data), [known]
+    path = Path(text).expanduser()
+    if path.is_dir():
+        path = path.resolve()
+        present = datasets.list_scenes(path)
+        if present:
+            return path, present
+        folders = {sub: name for name, (sub, _files) in datasets._SCENE_FILES.items()}
+        for depth in (1, 2):
+            parent = path.parents[depth - 1]
+            rel = path.relative_to(parent).as_posix()
+            if rel in folders:
+                return parent, [folders[rel]]
+        if path.name == "middlebury2005":
+            return path.parent, [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES]
+        msg = f"dataset folder '{path}' holds no known scene (expected a data root or one of {', '.join(folders)})"
+        raise ValueError(msg)
+    known_names = ", ".join(["all", "middlebury2005", *datasets._SCENE_FILES])
+    msg = f"unknown dataset {text!r}: give one of {known_names}, or a data folder"
+    raise ValueError(msg)
+
+
+def evaluate_dataset(root_or_scene_names, *, data=None, views="all", methods=DEFAULT_METHODS, downsample: int = 1, progress=None, **options) -> list:
+    """:func:`evaluate_scene` on every scene of a dataset argument (see :func:`resolve_dataset`).
+
+    ``progress``, if given, is called with each scene's result as it is
+    done. Returns the list of per-scene dicts.
+    """
+    from . import datasets
+
+    methods = _check_methods(methods)
+    select_views(3, 1, views)  # validate before loading anything
+    root, names = resolve_dataset(root_or_scene_names, data)
+    results = []
+    for name in names:
+        scene = datasets.load_scene(name, root)
+        res = evaluate_scene(scene, views=views, methods=methods, downsample=downsample, **options)
+        if progress is not None:
+            progress(res)
+        results.append(res)
+    return results
+
+
+# ------------------------------------------------------------------ output
+
+
+def _pct(x) -> str:
+    return "–" if x is None or not np.isfinite(x) else f"{100 * x:.1f} %"
+
+
+def _rel(x) -> str:
+    return "–" if x is None or not np.isfinite(x) else f"{100 * x:.2f} %"
+
+
+def _rows(result):
+    for method, entry in result["methods"].items():
+        for part in ("edges", "dense"):
+            errs = entry.get(part)
+            if errs is None:
+                continue
+            label = "edges" if method == "nfdepth" and part == "edges" else ("at nfdepth edges" if part == "edges" else "dense")
+            yield method, label, errs, entry["runtime_s"]
+
+
+def render_markdown(results) -> str:
+    """A markdown table: one row per scene, method and point set."""
+    if isinstance(results, dict):
+        results = [results]
+    head = (
+        "| scene | views | method | points | density | median rel | p90 rel | bad >1 px | bad >0.5 px | MAE px | runtime s |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+    )
+    lines = [head]
+    for res in results:
+        size = f" /{res['downsample']}" if res.get("downsample", 1) > 1 else ""
+        for method, label, e, rt in _rows(res):
+            lines.append(
+                f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
+                f"{_rel(e['median_rel'])} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | {_pct(e['bad_0_5px'])} | "
+                f"{'–' if not np.isfinite(e['mae_px']) else format(e['mae_px'], '.3f')} | {rt:.3f} |"
+            )
+    return "\n".join(lines)
+
+
+def to_jsonable(obj):
+    """Results with NaN/inf as None and numpy scalars as Python numbers (maps dropped)."""
+    if isinstance(obj, dict):
+        return {k: to_jsonable(v) for k, v in obj.items() if k not in ("maps", "truth", "edge_points")}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if np.isfinite(obj) else None
+    return obj
+
+
+def error_map_png(path, estimate, truth, *, title: str | None = None, vmax: float = 3.0) -> Path:
+    """Write ``|estimate - truth|`` (px) as a colour map with a colour bar.
+
+    Pixels where either is unknown are black. The scale runs 0..``vmax`` px
+    (default 3 px; larger errors saturate).
+    """
+    from . import plot
+
+    est = np.asarray(estimate, dtype=np.float64)
+    tru = np.asarray(truth, dtype=np.float64)
+    if est.shape != tru.shape:
+        msg = f"estimate and truth must have the same shape, got {est.shape} and {tru.shape}"
+        raise ValueError(msg)
+    err = np.abs(est - tru)
+    err[~(np.isfinite(est) & np.isfinite(tru))] = np.nan
+    fig = plot.colormap_panel(err, title=title or "|disparity error|", unit="|error| px", vmin=0.0, vmax=float(vmax))
+    return plot.save_figure(fig, path)

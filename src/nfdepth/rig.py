@@ -1,0 +1,663 @@
+"""Rig description files: cameras, their poses and motions, in TOML.
+
+A rig file replaces long option lists on the command line (``nfdepth
+dynamic``, ``nfdepth video``, ``nfdepth stereo --rig``). The format is
+documented in ``docs/rig-format.md``; in short::
+
+    [camera]                      # required
+    focal_px  = 100.0             # focal length, pixels (> 0)
+    width_px  = 200               # image size, pixels
+    height_px = 200
+    # cx_px = 99.5                # principal point (default: image centre)
+    # cy_px = 99.5
+
+    [motion]                      # dynamic stereo (nfdepth dynamic)
+    velocity       = [2.0, 0.0, 0.0]   # moving camera rel. to the reference, units / unit time
+    rotation_deg   = [0.0, 0.0, 0.0]   # its angular velocity, degrees / unit time
+    frame_interval = 1.0               # time between consecutive images
+
+    [stereo]                      # static rows (nfdepth stereo)
+    baseline  = 2.0               # spacing of neighbouring views (scene units)
+    axis      = "x"               # or direction = [1, 0, 0]
+    # positions = [0, 1, 2.5]     # in units of the baseline
+
+    [video]                       # single moving camera (nfdepth video)
+    velocity = [0.5, 0.0, 0.0]    # camera translation per frame (scene units)
+    # or: positions = [[0,0,0], [0.5,0,0], ...]   one per frame
+    # or: poses = "poses.csv"     # frame,x,y,z[,rx,ry,rz]; relative to this file
+
+Everything inside the library is in radians and in the conventions of
+``CONVENTIONS.md``: the rig gives the *camera's* motion ``T``, ``w``; the
+scene moves relative to it as ``V = -T``, ``Omega = -w``
+(:meth:`Rig.relative_motion`).
+
+Errors are :class:`RigError` (a ``ValueError``) naming the key path, the
+value found and what was expected.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .camera import PinholeCamera, RigidMotion
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = [
+    "RigError",
+    "MotionSpec",
+    "StereoSpec",
+    "VideoSpec",
+    "Poses",
+    "Rig",
+    "load_rig",
+    "rig_from_dict",
+    "rig_to_toml",
+    "load_poses",
+    "stereo_options_from_rig",
+    "dynamic_stereo_from_rig",
+    "edge_depth_maps",
+]
+
+
+class RigError(ValueError):
+    """A rig description is missing a field, has a wrong value, or contradicts itself."""
+
+
+# ----------------------------------------------------------------- helpers
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, str):
+        return repr(value)
+    if isinstance(value, float) and value.is_integer():
+        return repr(value)
+    return str(value) if not isinstance(value, (list, tuple)) else "[" + ", ".join(_show(v) for v in value) + "]"
+
+
+def _fail(key: str, value: Any, expected: str) -> RigError:
+    return RigError(f"{key} = {_show(value)}: expected {expected}")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _number(table: dict, section: str, name: str, *, required: bool = True, positive: bool = False, default=None):
+    key = f"{section}.{name}"
+    if name not in table:
+        if required:
+            raise RigError(f"{key} is missing: expected {'a positive number' if positive else 'a number'}")
+        return default
+    value = table[name]
+    if not _is_number(value) or not math.isfinite(value):
+        raise _fail(key, value, "a finite number")
+    if positive and value <= 0:
+        raise _fail(key, value, "a number > 0")
+    return float(value)
+
+
+def _integer(table: dict, section: str, name: str) -> int:
+    key = f"{section}.{name}"
+    if name not in table:
+        raise RigError(f"{key} is missing: expected a positive integer (pixels)")
+    value = table[name]
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+        raise _fail(key, value, "a positive integer (pixels)")
+    return value
+
+
+def _vector(table: dict, section: str, name: str, *, required: bool = False, default=None):
+    key = f"{section}.{name}"
+    if name not in table:
+        if required:
+            raise RigError(f"{key} is missing: expected 3 numbers [x, y, z]")
+        return default
+    value = table[name]
+    if not isinstance(value, list) or len(value) != 3 or not all(_is_number(v) and math.isfinite(v) for v in value):
+        raise _fail(key, value, "3 finite numbers [x, y, z]")
+    return np.array(value, dtype=float)
+
+
+def _check_keys(table: Any, section: str, allowed: tuple[str, ...]) -> dict:
+    if not isinstance(table, dict):
+        raise _fail(section, table, f"a table [{section}]")
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise RigError(f"{section}.{unknown[0]}: unknown key (expected one of {', '.join(allowed)})")
+    return table
+
+
+def _exclusive(table: dict, section: str, names: tuple[str, ...], *, required: bool) -> str | None:
+    given = [n for n in names if n in table]
+    if len(given) > 1:
+        raise RigError(f"{section}: {' and '.join(given)} contradict each other: give only one of {', '.join(names)}")
+    if not given:
+        if required:
+            raise RigError(f"{section}: expected one of {', '.join(names)}")
+        return None
+    return given[0]
+
+
+_AXES = {"x": np.array([1.0, 0.0, 0.0]), "y": np.array([0.0, 1.0, 0.0])}
+
+
+# ----------------------------------------------------------------- poses
+
+
+@dataclass(frozen=True, eq=False)
+class Poses:
+    """Camera poses per frame, from a CSV file (``frame,x,y,z[,rx,ry,rz]``).
+
+    Attributes
+    ----------
+    frames : ndarray of int, shape (N,)
+        Frame indices (0-based, strictly increasing).
+    positions : ndarray, shape (N, 3)
+        Optical centre of each frame in world coordinates (scene units).
+    rotations_deg : ndarray, shape (N, 3)
+        Camera-to-world orientation as a rotation vector in degrees (zeros
+        when the file has no ``rx, ry, rz`` columns).
+    source : Path or None
+        The file read.
+    """
+
+    frames: np.ndarray
+    positions: np.ndarray
+    rotations_deg: np.ndarray
+    source: Path | None = None
+
+    def position(self, frame: int) -> np.ndarray:
+        """Optical centre of ``frame`` (:class:`RigError` if the file has no such row)."""
+        idx = np.searchsorted(self.frames, frame)
+        if idx >= self.frames.size or self.frames[idx] != frame:
+            where = f" in '{self.source}'" if self.source else ""
+            raise RigError(f"poses{where}: no row for frame {frame} (the file covers frames {self.frames[0]}..{self.frames[-1]})")
+        return self.positions[idx]
+
+    def rotation(self, frame: int) -> np.ndarray:
+        """Orientation (rotation vector, degrees) of ``frame``."""
+        self.position(frame)
+        return self.rotations_deg[np.searchsorted(self.frames, frame)]
+
+
+def load_poses(path) -> Poses:
+    """Read a poses CSV: header ``frame,x,y,z`` and optionally ``rx,ry,rz`` (degrees).
+
+    ``frame`` is the 0-based frame index (integers, strictly increasing);
+    ``x, y, z`` the camera's optical centre in world coordinates (scene
+    units); ``rx, ry, rz`` its camera-to-world orientation as a rotation
+    vector in degrees. Raises :class:`RigError` naming the line and column.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"cannot read poses file '{path}': no such file")
+    with path.open(newline="") as fh:
+        rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise RigError(f"poses '{path}': the file is empty; expected a header frame,x,y,z[,rx,ry,rz]")
+    header = [h.strip().lower() for h in rows[0]]
+    if header not in (["frame", "x", "y", "z"], ["frame", "x", "y", "z", "rx", "ry", "rz"]):
+        raise RigError(f"poses '{path}' line 1: header {','.join(header)!r}: expected 'frame,x,y,z' or 'frame,x,y,z,rx,ry,rz'")
+    n_cols = len(header)
+    frames, values = [], []
+    for line_no, row in enumerate(rows[1:], start=2):
+        if len(row) != n_cols:
+            raise RigError(f"poses '{path}' line {line_no}: {len(row)} columns: expected {n_cols} ({','.join(header)})")
+        try:
+            frame_val = float(row[0])
+        except ValueError:
+            raise RigError(f"poses '{path}' line {line_no}: frame = {row[0]!r}: expected an integer frame index") from None
+        if not frame_val.is_integer() or frame_val < 0:
+            raise RigError(f"poses '{path}' line {line_no}: frame = {row[0]!r}: expected an integer frame index >= 0")
+        vals = []
+        for name, text in zip(header[1:], row[1:]):
+            try:
+                v = float(text)
+            except ValueError:
+                v = math.nan
+            if not math.isfinite(v):
+                raise RigError(f"poses '{path}' line {line_no}: {name} = {text.strip()!r}: expected a finite number")
+            vals.append(v)
+        frames.append(int(frame_val))
+        values.append(vals)
+    if not frames:
+        raise RigError(f"poses '{path}': no data rows after the header")
+    frames_arr = np.asarray(frames, dtype=np.int64)
+    if np.any(np.diff(frames_arr) <= 0):
+        bad = int(np.argmax(np.diff(frames_arr) <= 0)) + 3
+        raise RigError(f"poses '{path}' line {bad}: frame indices must be strictly increasing")
+    arr = np.asarray(values, dtype=float)
+    rot = arr[:, 3:6] if n_cols == 7 else np.zeros((arr.shape[0], 3))
+    return Poses(frames_arr, arr[:, :3], rot, source=path)
+
+
+# ----------------------------------------------------------------- specs
+
+
+@dataclass(frozen=True, eq=False)
+class MotionSpec:
+    """``[motion]``: the moving camera relative to the reference camera (dynamic stereo).
+
+    Attributes
+    ----------
+    velocity : ndarray, shape (3,)
+        Translation ``T`` of the moving camera relative to the reference
+        camera, scene units per unit time, in the reference camera's frame.
+    rotation_deg : ndarray, shape (3,)
+        Its angular velocity ``w``, degrees per unit time.
+    frame_interval : float
+        Time between consecutive images ``I_k``, ``I_k+1``.
+    """
+
+    velocity: np.ndarray
+    rotation_deg: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    frame_interval: float = 1.0
+
+    def relative_motion(self) -> RigidMotion:
+        """``(dV, dOmega) = (-T, -w)`` in radians (CONVENTIONS: a camera moving by T sees V = -T)."""
+        return RigidMotion(translation=0.0 - self.velocity + 0.0, rotation=0.0 - np.deg2rad(self.rotation_deg) + 0.0)
+
+    def __eq__(self, other) -> bool:
+        return (
+            isinstance(other, MotionSpec)
+            and np.array_equal(self.velocity, other.velocity)
+            and np.array_equal(self.rotation_deg, other.rotation_deg)
+            and self.frame_interval == other.frame_interval
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class StereoSpec:
+    """``[stereo]``: a row of static views.
+
+    Attributes
+    ----------
+    baseline : float
+        Spacing of neighbouring views (scene units, > 0).
+    direction : ndarray, shape (3,)
+        Unit direction of travel from the first view to the last.
+    axis : str or None
+        ``"x"`` or ``"y"`` when given as ``axis`` (else None).
+    positions : tuple of float or None
+        View positions in units of the baseline (strictly increasing).
+    """
+
+    baseline: float
+    direction: np.ndarray
+    axis: str | None = None
+    positions: tuple | None = None
+
+    def __eq__(self, other) -> bool:
+        return (
+            isinstance(other, StereoSpec)
+            and self.baseline == other.baseline
+            and np.array_equal(self.direction, other.direction)
+            and self.axis == other.axis
+            and self.positions == other.positions
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class VideoSpec:
+    """``[video]``: one camera translating through a static scene.
+
+    Exactly one of the three is set.
+
+    Attributes
+    ----------
+    velocity : ndarray (3,) or None
+        Camera translation per frame (scene units), constant.
+    positions : ndarray (N, 3) or None
+        Camera optical centre of each frame (world = camera axes).
+    poses : Poses or None
+        Loaded from a CSV (path relative to the rig file's folder).
+    """
+
+    velocity: np.ndarray | None = None
+    positions: np.ndarray | None = None
+    poses: Poses | None = None
+
+    def camera_position(self, frame: int) -> np.ndarray:
+        """Optical centre of ``frame`` in world coordinates (frame 0 at the origin for ``velocity``)."""
+        if self.velocity is not None:
+            return frame * self.velocity
+        if self.positions is not None:
+            if not 0 <= frame < len(self.positions):
+                raise RigError(f"video.positions has {len(self.positions)} entries: no position for frame {frame}")
+            return self.positions[frame]
+        assert self.poses is not None
+        return self.poses.position(frame)
+
+    def orientation_deg(self, frame: int) -> np.ndarray:
+        """Camera-to-world rotation vector (degrees) of ``frame``; zeros unless poses give it."""
+        if self.poses is not None:
+            return self.poses.rotation(frame)
+        return np.zeros(3)
+
+    def __eq__(self, other) -> bool:
+        def same(a, b):
+            return (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
+
+        return (
+            isinstance(other, VideoSpec)
+            and same(self.velocity, other.velocity)
+            and same(self.positions, other.positions)
+            and ((self.poses is None) == (other.poses is None))
+            and (self.poses is None or (np.array_equal(self.poses.positions, other.poses.positions) and np.array_equal(self.poses.frames, other.poses.frames)))
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Rig:
+    """A camera rig: intrinsics plus the motions the commands need.
+
+    Attributes
+    ----------
+    camera : PinholeCamera
+        Intrinsics shared by the rig's cameras.
+    motion : MotionSpec or None
+        ``[motion]`` (needed by :func:`nfdepth.pipelines.dynamic_stereo`).
+    stereo : StereoSpec or None
+        ``[stereo]`` (static rows).
+    video : VideoSpec or None
+        ``[video]`` (:func:`nfdepth.video.depth_from_video`).
+    source : Path or None
+        The file it was read from.
+    """
+
+    camera: PinholeCamera
+    motion: MotionSpec | None = None
+    stereo: StereoSpec | None = None
+    video: VideoSpec | None = None
+    source: Path | None = None
+
+    def _need(self, section: str):
+        spec = getattr(self, section)
+        if spec is None:
+            where = f"rig '{self.source}'" if self.source else "the rig"
+            raise RigError(f"{where} has no [{section}] section, which this command needs")
+        return spec
+
+    def relative_motion(self) -> RigidMotion:
+        """Relative motion ``(V_m - V_s, Omega_m - Omega_s)`` of ``[motion]`` (radians)."""
+        return self._need("motion").relative_motion()
+
+    @property
+    def frame_interval(self) -> float:
+        """``[motion].frame_interval``."""
+        return self._need("motion").frame_interval
+
+    def check_image_shape(self, shape, what: str = "the images") -> None:
+        """Raise :class:`RigError` unless ``shape`` (rows, cols) matches ``[camera]``."""
+        rows, cols = int(shape[0]), int(shape[1])
+        if (rows, cols) != self.camera.shape:
+            src = f" ({self.source.name})" if self.source else ""
+            raise RigError(
+                f"camera.width_px x camera.height_px = {self.camera.width_px}x{self.camera.height_px}{src}"
+                f" does not match {what} ({cols}x{rows})"
+            )
+
+    def __eq__(self, other) -> bool:
+        return (
+            isinstance(other, Rig)
+            and self.camera == other.camera
+            and self.motion == other.motion
+            and self.stereo == other.stereo
+            and self.video == other.video
+        )
+
+
+# ----------------------------------------------------------------- parsing
+
+
+def _parse_camera(table) -> PinholeCamera:
+    t = _check_keys(table, "camera", ("focal_px", "width_px", "height_px", "cx_px", "cy_px"))
+    focal = _number(t, "camera", "focal_px", positive=True)
+    width = _integer(t, "camera", "width_px")
+    height = _integer(t, "camera", "height_px")
+    cx = _number(t, "camera", "cx_px", required=False)
+    cy = _number(t, "camera", "cy_px", required=False)
+    return PinholeCamera(focal, width, height, cx, cy)
+
+
+def _parse_motion(table) -> MotionSpec:
+    t = _check_keys(table, "motion", ("velocity", "rotation_deg", "frame_interval"))
+    velocity = _vector(t, "motion", "velocity", required=True)
+    if not np.any(velocity):
+        raise _fail("motion.velocity", t["velocity"], "a non-zero translation (depth needs a baseline between the cameras)")
+    rotation = _vector(t, "motion", "rotation_deg", default=np.zeros(3))
+    interval = _number(t, "motion", "frame_interval", required=False, positive=True, default=1.0)
+    return MotionSpec(velocity, rotation, interval)
+
+
+def _parse_stereo(table) -> StereoSpec:
+    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions"))
+    baseline = _number(t, "stereo", "baseline", positive=True)
+    which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
+    axis = None
+    if which == "direction":
+        direction = _vector(t, "stereo", "direction")
+        if not np.any(direction):
+            raise _fail("stereo.direction", t["direction"], "a non-zero direction of travel")
+        direction = direction / np.linalg.norm(direction)
+    else:
+        axis = t.get("axis", "x")
+        if axis not in _AXES:
+            raise _fail("stereo.axis", axis, '"x" or "y"')
+        direction = _AXES[axis].copy()
+    positions = None
+    if "positions" in t:
+        p = t["positions"]
+        if not isinstance(p, list) or len(p) < 2 or not all(_is_number(v) and math.isfinite(v) for v in p):
+            raise _fail("stereo.positions", p, "a list of 2 or more finite numbers (units of the baseline)")
+        if not all(b > a for a, b in zip(p, p[1:])):
+            raise _fail("stereo.positions", p, "strictly increasing positions (views ordered along the baseline)")
+        positions = tuple(float(v) for v in p)
+    return StereoSpec(baseline, direction, axis, positions)
+
+
+def _parse_video(table, base: Path | None) -> VideoSpec:
+    t = _check_keys(table, "video", ("velocity", "positions", "poses"))
+    which = _exclusive(t, "video", ("velocity", "positions", "poses"), required=True)
+    if which == "velocity":
+        v = _vector(t, "video", "velocity")
+        if not np.any(v):
+            raise _fail("video.velocity", t["velocity"], "a non-zero camera translation per frame")
+        return VideoSpec(velocity=v)
+    if which == "positions":
+        p = t["positions"]
+        ok = isinstance(p, list) and len(p) >= 3 and all(
+            isinstance(r, list) and len(r) == 3 and all(_is_number(v) and math.isfinite(v) for v in r) for r in p
+        )
+        if not ok:
+            raise _fail("video.positions", p, "a list of 3 or more [x, y, z] camera positions, one per frame")
+        return VideoSpec(positions=np.asarray(p, dtype=float))
+    path = t["poses"]
+    if not isinstance(path, str) or not path:
+        raise _fail("video.poses", path, "a path to a CSV file (frame,x,y,z[,rx,ry,rz])")
+    full = Path(path)
+    if not full.is_absolute() and base is not None:
+        full = base / full
+    return VideoSpec(poses=load_poses(full))
+
+
+def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
+    """Build a :class:`Rig` from a parsed TOML document (a dict).
+
+    Parameters
+    ----------
+    data : dict
+        With a ``camera`` table and optionally ``motion``, ``stereo``,
+        ``video`` tables (see the module docstring).
+    base_dir : path, optional
+        Folder against which ``video.poses`` is resolved (the rig file's).
+    source : path, optional
+        Recorded in :attr:`Rig.source` for messages.
+
+    Raises
+    ------
+    RigError
+        With the key path, the value and what was expected.
+    """
+    if not isinstance(data, dict):
+        raise RigError(f"rig: expected a table of sections, got {type(data).__name__}")
+    _check_keys(data, "rig", ("camera", "motion", "stereo", "video"))
+    if "camera" not in data:
+        raise RigError("camera is missing: expected a [camera] table with focal_px, width_px, height_px")
+    base = Path(base_dir) if base_dir is not None else None
+    return Rig(
+        camera=_parse_camera(data["camera"]),
+        motion=_parse_motion(data["motion"]) if "motion" in data else None,
+        stereo=_parse_stereo(data["stereo"]) if "stereo" in data else None,
+        video=_parse_video(data["video"], base) if "video" in data else None,
+        source=Path(source) if source is not None else None,
+    )
+
+
+def load_rig(path) -> Rig:
+    """Read and validate a rig TOML file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    RigError
+        For invalid TOML or an invalid rig; the message starts with the file name.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"cannot read rig file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise RigError(f"rig '{path}': not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise RigError(f"rig '{path}': not a UTF-8 text file") from None
+    try:
+        return rig_from_dict(data, base_dir=path.parent, source=path)
+    except RigError as exc:
+        raise RigError(f"rig '{path}': {exc}") from None
+
+
+# ----------------------------------------------------------------- writing
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return repr(float(v))
+
+
+def rig_to_toml(rig: Rig) -> str:
+    """TOML text of ``rig``; :func:`rig_from_dict` of its parse gives back an equal rig.
+
+    A ``video.poses`` section is written as the absolute path of its CSV.
+    """
+    cam = rig.camera
+    lines = ["[camera]", f"focal_px = {_toml_value(cam.focal_px)}", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
+    lines += [f"cx_px = {_toml_value(cam.cx_px)}", f"cy_px = {_toml_value(cam.cy_px)}"]
+    if rig.motion is not None:
+        m = rig.motion
+        lines += ["", "[motion]", f"velocity = {_toml_value(m.velocity)}", f"rotation_deg = {_toml_value(m.rotation_deg)}"]
+        lines.append(f"frame_interval = {_toml_value(m.frame_interval)}")
+    if rig.stereo is not None:
+        s = rig.stereo
+        lines += ["", "[stereo]", f"baseline = {_toml_value(s.baseline)}"]
+        lines.append(f"axis = {_toml_value(s.axis)}" if s.axis else f"direction = {_toml_value(s.direction)}")
+        if s.positions is not None:
+            lines.append(f"positions = {_toml_value(s.positions)}")
+    if rig.video is not None:
+        v = rig.video
+        lines += ["", "[video]"]
+        if v.velocity is not None:
+            lines.append(f"velocity = {_toml_value(v.velocity)}")
+        elif v.positions is not None:
+            lines.append(f"positions = {_toml_value([list(p) for p in v.positions])}")
+        else:
+            assert v.poses is not None and v.poses.source is not None
+            lines.append(f"poses = {_toml_value(str(Path(v.poses.source).resolve()))}")
+    return "\n".join(lines) + "\n"
+
+
+# ----------------------------------------------------------------- adapters
+
+
+def stereo_options_from_rig(rig: Rig) -> dict:
+    """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
+
+    Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None)``.
+    :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
+    a ``direction`` must be one of those.
+    """
+    s = rig._need("stereo")
+    axis = s.axis
+    if axis is None:
+        for name, vec in _AXES.items():
+            if np.allclose(s.direction, vec, atol=1e-9):
+                axis = name
+        if axis is None:
+            raise _fail(
+                "stereo.direction", list(s.direction), '[1, 0, 0] or [0, 1, 0] for nfdepth stereo (order the views so the camera moves toward +x or +y)'
+            )
+    return {
+        "focal_px": float(rig.camera.focal_px),
+        "baseline": float(s.baseline),
+        "axis": axis,
+        "positions": list(s.positions) if s.positions is not None else None,
+    }
+
+
+def dynamic_stereo_from_rig(frames, rig: Rig, **options):
+    """:func:`nfdepth.pipelines.dynamic_stereo` with the camera, relative motion and frame interval of ``rig``.
+
+    ``frames`` are ``I1 .. I5`` (see :func:`nfdepth.pipelines.dynamic_stereo`);
+    their size is checked against ``[camera]`` (:class:`RigError`).
+    ``options`` go to :func:`~nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...).
+    This is the library form of ``nfdepth dynamic``.
+    """
+    from .pipelines import dynamic_stereo
+
+    frames = list(frames)
+    if len(frames) != 5:
+        raise ValueError(f"dynamic stereo needs exactly 5 images I1..I5, got {len(frames)}")
+    for k, f in enumerate(frames, 1):
+        rig.check_image_shape(np.shape(f), what=f"image I{k}")
+    return dynamic_stereo(frames, camera=rig.camera, relative_motion=rig.relative_motion(), frame_interval=rig.frame_interval, **options)
+
+
+def edge_depth_maps(result) -> tuple[np.ndarray, np.ndarray]:
+    """Depth and its std at the edge points of an :class:`~nfdepth.pipelines.EdgeDepth`, as images.
+
+    Returns two float32 ``(H, W)`` maps, NaN off the edge points (and where a
+    point has no depth). Map pixel ``[i, j]`` holds the point at the cell
+    centre ``(i + 0.5, j + 0.5)`` (:mod:`nfdepth.normal_flow`); the exact
+    sub-pixel positions are ``result.rows``, ``result.cols``.
+    """
+    h, w = result.camera.shape
+    depth = np.full((h, w), np.nan, dtype=np.float32)
+    std = np.full((h, w), np.nan, dtype=np.float32)
+    ok = result.valid
+    ii = np.floor(result.rows[ok]).astype(np.int64)
+    jj = np.floor(result.cols[ok]).astype(np.int64)
+    depth[ii, jj] = result.depth[ok]
+    std[ii, jj] = result.depth_std[ok]
+    return depth, std

@@ -1,0 +1,551 @@
+"""Depth from a single camera translating through a static scene (video).
+
+Each triple of successive frames ``(k-1, k, k+1)`` is static stereo (paper
+section 2.3): the stationary partner's normal flow is zero, so the relative
+normal flow is the sequence's own, with relative motion ``dV = -T`` where
+``T = (P_k+1 - P_k-1) / 2`` is the camera's translation per frame (central
+difference of the known positions, in the camera frame). Inverse depth and
+its standard deviation come from :func:`nfdepth.pipelines.static_stereo_edges`
+at the strong zero-crossing edge points of frame ``k`` (paper eq. 4, general
+translation direction, so forward motion works as well as lateral).
+
+Temporal fusion (a per-pixel Kalman filter on inverse depth)
+-------------------------------------------------------------
+The state is a map of inverse depth ``rho`` and variance on the cell grid of
+the frame: map pixel ``[i, j]`` holds the estimate at the cell centre
+``(i + 0.5, j + 0.5)`` (:mod:`nfdepth.normal_flow`). From frame ``k-1`` to
+``k``:
+
+1. *Predict*: every state point is back-projected with its depth, moved by
+   the camera's displacement ``-(P_k - P_k-1)`` and re-projected
+   (:meth:`PinholeCamera.project`); its inverse depth becomes ``1/Z'`` and
+   its std scales by ``(Z/Z')**2``. Where two points land on one pixel the
+   nearer wins. Process noise inflates the variance:
+   ``var += (process_noise * rho)**2`` per frame.
+2. *Associate*: a new edge measurement takes the prior at its own pixel or,
+   failing that, the one with the smallest variance in its 3 x 3
+   neighbourhood (edges move by sub-pixel amounts and zero crossings snap to
+   cells). A prior more than ``gate`` combined standard deviations away is
+   dropped (occlusion, a new surface) and the measurement starts afresh.
+3. *Update*: ``rho = (rho_p / var_p + rho_n / var_n) / (1/var_p + 1/var_n)``,
+   ``var = 1 / (1/var_p + 1/var_n)``.
+4. Points not measured for more than ``max_age`` frames are dropped.
+
+Measurement standard deviations are floored at ``min_std_px`` of disparity
+(``rho_std >= min_std_px / (f |T|)``): the noise model does not see the
+stencil's discretisation error, and noise-free frames would otherwise get
+infinite weight.
+
+The differential method needs the motion per frame to be small: about
+0.2-2 px of disparity (``f |T| / Z``). Subsample the video (or pick frames)
+when the camera moves faster.
+"""
+
+from __future__ import annotations
+
+import glob as _glob
+import re
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ._validate import as_image, check_nonnegative_finite, check_positive_finite
+from .camera import PinholeCamera
+from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
+from .pipelines import static_stereo_edges
+from .rig import Rig, RigError, VideoSpec
+
+__all__ = [
+    "VideoDepthFrame",
+    "FrameSource",
+    "read_video",
+    "depth_from_video",
+    "VIDEO_EXTENSIONS",
+    "NPZ_ARRAYS",
+    "write_video_npz",
+    "write_video_frame",
+    "video_frame_names",
+]
+
+#: Extensions :func:`read_video` opens with ``cv2.VideoCapture``.
+VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv")
+
+
+# ------------------------------------------------------------------ reading
+
+
+def _natural_key(path: Path):
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
+
+
+class FrameSource:
+    """Grey float32 frames of a video file or an image sequence, iterable once per ``iter``.
+
+    Attributes
+    ----------
+    paths : list of Path or None
+        The image files (image sequences), in natural sort order.
+    video : Path or None
+        The video file.
+    """
+
+    def __init__(self, *, paths=None, video=None):
+        self.paths = paths
+        self.video = video
+
+    def __len__(self) -> int:
+        if self.paths is not None:
+            return len(self.paths)
+        cap = cv2.VideoCapture(str(self.video))
+        try:
+            return max(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)), 0)
+        finally:
+            cap.release()
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        if self.paths is not None:
+            for p in self.paths:
+                yield read_image(p, dtype=np.float32)
+            return
+        cap = cv2.VideoCapture(str(self.video))
+        if not cap.isOpened():
+            raise ImageReadError(f"cannot read video '{self.video}': OpenCV could not open it")
+        try:
+            count = 0
+            while True:
+                ok, frame = cap.read()
+                if not ok:
+                    break
+                count += 1
+                if frame.ndim == 3:
+                    frame = to_grey(frame[..., ::-1], dtype=np.float32)
+                yield frame.astype(np.float32, copy=False)
+            if count == 0:
+                raise ImageReadError(f"cannot read video '{self.video}': no frames could be decoded")
+        finally:
+            cap.release()
+
+
+def read_video(path) -> FrameSource:
+    """Frames of a video file, an image folder or a glob pattern, as grey float32.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A video file (:data:`VIDEO_EXTENSIONS`, read with ``cv2.VideoCapture``,
+        colour converted with BT.601 luma), a folder of images
+        (:data:`nfdepth.io.READ_EXTENSIONS`), or a glob such as
+        ``"frames/*.png"``. Image sequences are sorted naturally
+        (``f2.png`` before ``f10.png``).
+
+    Returns
+    -------
+    FrameSource
+        Iterable of ``(H, W)`` float32 frames, with ``len()``.
+
+    Raises
+    ------
+    ImageReadError
+        Nothing matched, or an unsupported file type.
+    """
+    text = str(path)
+    p = Path(text)
+    if p.is_dir():
+        files = [f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READ_EXTENSIONS]
+        if not files:
+            raise ImageReadError(f"cannot read frames from '{p}': the folder has no image files ({', '.join(READ_EXTENSIONS)})")
+        return FrameSource(paths=sorted(files, key=_natural_key))
+    if any(ch in text for ch in "*?["):
+        files = [Path(f) for f in _glob.glob(text) if Path(f).is_file()]
+        if not files:
+            raise ImageReadError(f"cannot read frames from '{text}': the pattern matches no files")
+        return FrameSource(paths=sorted(files, key=_natural_key))
+    if not p.exists():
+        raise ImageReadError(f"cannot read video '{p}': no such file")
+    if p.suffix.lower() in VIDEO_EXTENSIONS:
+        return FrameSource(video=p)
+    raise ImageReadError(
+        f"cannot read video '{p}': unsupported extension {p.suffix!r}; give a video ({', '.join(VIDEO_EXTENSIONS)}),"
+        " a folder of images or a glob pattern"
+    )
+
+
+# ------------------------------------------------------------------ results
+
+
+@dataclass(frozen=True, eq=False)
+class VideoDepthFrame:
+    """Fused inverse depth of one frame (the middle of a triple).
+
+    Maps have the frame's shape ``(H, W)``; pixel ``[i, j]`` holds the
+    estimate at the cell centre ``(i + 0.5, j + 0.5)``; NaN where unknown.
+
+    Attributes
+    ----------
+    index : int
+        Frame index (0-based) in the input.
+    inverse_depth, inverse_depth_std : ndarray, float32
+        Fused (filtered) inverse depth and its standard deviation.
+    measured_inverse_depth, measured_inverse_depth_std : ndarray, float32
+        This triple's own measurement (edge points of this frame only).
+    count : ndarray, uint16
+        Measurements fused into each state pixel so far.
+    camera_position : ndarray, shape (3,)
+        Optical centre of the frame (world coordinates).
+    baseline : float
+        ``|T|``: the camera's translation per frame around this frame.
+    """
+
+    index: int
+    inverse_depth: np.ndarray
+    inverse_depth_std: np.ndarray
+    measured_inverse_depth: np.ndarray
+    measured_inverse_depth_std: np.ndarray
+    count: np.ndarray
+    camera_position: np.ndarray
+    baseline: float
+
+    @property
+    def depth(self) -> np.ndarray:
+        """Fused depth ``1 / rho`` (NaN where unknown)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.inverse_depth > 0, 1.0 / self.inverse_depth, np.nan).astype(np.float32)
+
+    @property
+    def depth_std(self) -> np.ndarray:
+        """First-order std of the fused depth, ``rho_std / rho**2``."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.inverse_depth > 0, self.inverse_depth_std / self.inverse_depth**2, np.nan).astype(np.float32)
+
+    @property
+    def measured(self) -> np.ndarray:
+        """Pixels with a measurement from this frame's triple."""
+        return np.isfinite(self.measured_inverse_depth)
+
+
+# ------------------------------------------------------------------ fusion
+
+
+class _State:
+    def __init__(self, shape):
+        self.rho = np.full(shape, np.nan)
+        self.var = np.full(shape, np.nan)
+        self.age = np.zeros(shape, dtype=np.int32)
+        self.count = np.zeros(shape, dtype=np.int32)
+
+
+def _predict(state: _State, camera: PinholeCamera, displacement_cam: np.ndarray, process_noise: float) -> _State:
+    """Move the state to the next frame: reproject with depth, inflate variance."""
+    out = _State(state.rho.shape)
+    ii, jj = np.nonzero(np.isfinite(state.rho))
+    if ii.size == 0:
+        return out
+    rho = state.rho[ii, jj]
+    pts = camera.back_project(ii + 0.5, jj + 0.5, 1.0 / rho) - displacement_cam
+    r, c, z = camera.project(pts)
+    ti = np.floor(r).astype(np.int64)
+    tj = np.floor(c).astype(np.int64)
+    h, w = state.rho.shape
+    keep = (z > 0) & (ti >= 0) & (ti < h) & (tj >= 0) & (tj < w)
+    if not np.any(keep):
+        return out
+    zz = z[keep]
+    rho_new = 1.0 / zz
+    scale = (rho_new / rho[keep]) ** 2  # d rho' / d rho = (Z / Z')^2
+    var_new = state.var[ii, jj][keep] * scale**2 + (process_noise * rho_new) ** 2
+    lin = ti[keep] * w + tj[keep]
+    order = np.argsort(-rho_new, kind="stable")  # nearest first: it occludes the rest
+    lin_sorted = lin[order]
+    _, first = np.unique(lin_sorted, return_index=True)
+    pick = order[first]
+    flat = lin[pick]
+    out.rho.flat[flat] = rho_new[pick]
+    out.var.flat[flat] = var_new[pick]
+    out.age.flat[flat] = state.age[ii, jj][keep][pick] + 1
+    out.count.flat[flat] = state.count[ii, jj][keep][pick]
+    return out
+
+
+def _neighbour_prior(prior: _State, mask: np.ndarray):
+    """Per measured pixel: prior from its own pixel, else the lowest-variance 3 x 3 neighbour."""
+    h, w = prior.rho.shape
+    best_var = np.full((h, w), np.inf)
+    best_rho = np.full((h, w), np.nan)
+    best_count = np.zeros((h, w), dtype=np.int32)
+    src_lin = np.full((h, w), -1, dtype=np.int64)
+    pad = 1
+    var_p = np.pad(np.where(np.isfinite(prior.var), prior.var, np.inf), pad, constant_values=np.inf)
+    rho_p = np.pad(prior.rho, pad, constant_values=np.nan)
+    cnt_p = np.pad(prior.count, pad)
+    lin_p = np.pad(np.arange(h * w, dtype=np.int64).reshape(h, w), pad, constant_values=-1)
+    offsets = [(0, 0)] + [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if (di, dj) != (0, 0)]
+    for di, dj in offsets:
+        v = var_p[pad + di : pad + di + h, pad + dj : pad + dj + w]
+        # the own pixel wins outright whenever it has a prior
+        better = mask & (v < best_var) & ((di, dj) == (0, 0) or ~np.isfinite(prior.var))
+        best_var = np.where(better, v, best_var)
+        best_rho = np.where(better, rho_p[pad + di : pad + di + h, pad + dj : pad + dj + w], best_rho)
+        best_count = np.where(better, cnt_p[pad + di : pad + di + h, pad + dj : pad + dj + w], best_count)
+        src_lin = np.where(better, lin_p[pad + di : pad + di + h, pad + dj : pad + dj + w], src_lin)
+    return best_rho, best_var, best_count, src_lin
+
+
+def _update(prior: _State, rho_m: np.ndarray, var_m: np.ndarray, *, gate: float, max_age: int) -> _State:
+    measured = np.isfinite(rho_m)
+    p_rho, p_var, p_count, src = _neighbour_prior(prior, measured)
+    has_prior = measured & np.isfinite(p_var)
+    with np.errstate(invalid="ignore"):
+        consistent = has_prior & (np.abs(p_rho - rho_m) <= gate * np.sqrt(p_var + var_m))
+    out = _State(prior.rho.shape)
+    # unmeasured prior points survive (until too old) unless a measurement took them over
+    consumed = np.zeros(prior.rho.size, dtype=bool)
+    consumed[src[has_prior]] = True
+    survive = np.isfinite(prior.rho) & ~measured & ~consumed.reshape(prior.rho.shape) & (prior.age <= max_age)
+    out.rho[survive] = prior.rho[survive]
+    out.var[survive] = prior.var[survive]
+    out.age[survive] = prior.age[survive]
+    out.count[survive] = prior.count[survive]
+    fresh = measured & ~consistent
+    out.rho[fresh] = rho_m[fresh]
+    out.var[fresh] = var_m[fresh]
+    out.count[fresh] = 1
+    k = consistent
+    info = 1.0 / p_var[k] + 1.0 / var_m[k]
+    out.rho[k] = (p_rho[k] / p_var[k] + rho_m[k] / var_m[k]) / info
+    out.var[k] = 1.0 / info
+    out.count[k] = p_count[k] + 1
+    out.age[measured] = 0
+    return out
+
+
+# ------------------------------------------------------------------ the pipeline
+
+
+def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
+    given = [n for n, v in (("rig", rig), ("velocity", velocity), ("positions", positions)) if v is not None]
+    if len(given) != 1:
+        msg = f"give exactly one of rig, velocity, positions (camera motion per frame); got {', '.join(given) or 'none'}"
+        raise TypeError(msg) if not given else ValueError(msg)
+    if rig is not None:
+        if rig.video is None:
+            where = f"rig '{rig.source}'" if rig.source else "the rig"
+            raise RigError(f"{where} has no [video] section: expected video.velocity, video.positions or video.poses")
+        return rig.video
+    if velocity is not None:
+        v = np.asarray(velocity, dtype=float)
+        if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.any(v):
+            msg = f"velocity must be 3 finite numbers, not all zero (camera translation per frame), got {np.asarray(velocity).tolist()}"
+            raise ValueError(msg)
+        return VideoSpec(velocity=v)
+    p = np.asarray(positions, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
+        msg = f"positions must have shape (N, 3) with finite values, got shape {p.shape}"
+        raise ValueError(msg)
+    return VideoSpec(positions=p)
+
+
+def _camera_rotation(spec: VideoSpec, frame: int, reference) -> np.ndarray:
+    rot = spec.orientation_deg(frame)
+    if reference is not None and not np.allclose(rot, reference, atol=1e-6):
+        raise RigError(
+            f"poses: frame {frame} has orientation {rot.tolist()} deg, frame 0 of the run {np.asarray(reference).tolist()} deg:"
+            " video needs a camera that translates without rotating"
+        )
+    return rot
+
+
+def depth_from_video(
+    frames: Iterable,
+    *,
+    rig: Rig | None = None,
+    camera: PinholeCamera | None = None,
+    velocity=None,
+    positions=None,
+    first_frame: int = 0,
+    sigma_px: float = 2.0,
+    process_noise: float = 0.01,
+    gate: float = 4.0,
+    max_age: int = 2,
+    min_std_px: float = 0.01,
+    min_cos: float = 0.25,
+    noise_std: float | None = None,
+    stencil: str = "matched",
+) -> Iterator[VideoDepthFrame]:
+    """Depth per frame of a camera translating through a static scene, fused over time.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray, shape (H, W)
+        Grey frames in order (e.g. :func:`read_video`). Consumed lazily.
+    rig : Rig, optional
+        Gives the camera (``[camera]``) and the motion per frame (``[video]``).
+        Without it, give ``camera`` and one of ``velocity`` / ``positions``.
+    camera : PinholeCamera, optional
+        Intrinsics (overrides the rig's).
+    velocity : 3 floats, optional
+        Camera translation per frame (scene units, camera axes).
+    positions : array_like, shape (N, 3), optional
+        Camera optical centre of every frame (world axes = camera axes, or
+        rotated by a constant orientation from a poses CSV).
+    first_frame : int
+        Index of the first element of ``frames`` in the positions / poses.
+    sigma_px : float
+        Gaussian smoothing (px) of the normal-flow estimate.
+    process_noise : float
+        Relative std of inverse depth added per frame in the prediction.
+    gate : float
+        Measurements further than ``gate`` combined stds from their prior
+        restart that pixel.
+    max_age : int
+        Frames a state point survives without a new measurement.
+    min_std_px : float
+        Floor of a measurement's std, in px of disparity.
+    min_cos, noise_std, stencil
+        As in :func:`nfdepth.pipelines.static_stereo_edges`.
+
+    Yields
+    ------
+    VideoDepthFrame
+        One per frame that has a neighbour on each side (frames
+        ``1 .. N-2``), each yielded once the following frame has arrived.
+        A triple in which the camera does not move gives no measurement;
+        the state is carried over (predicted) instead.
+
+    Raises
+    ------
+    RigError, ValueError
+        Size mismatch with the rig's camera, no motion given, rotating poses.
+    """
+    spec = _positions_from(rig, velocity, positions)
+    cam = camera if camera is not None else (rig.camera if rig is not None else None)
+    if not isinstance(cam, PinholeCamera):
+        msg = "depth_from_video needs a camera: pass rig=... or camera=PinholeCamera(...)"
+        raise TypeError(msg)
+    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    process_noise = check_nonnegative_finite("process_noise", process_noise)
+    gate = check_positive_finite("gate", gate)
+    min_std_px = check_positive_finite("min_std_px", min_std_px)
+    if int(max_age) < 0:
+        msg = f"max_age must be >= 0, got {max_age!r}"
+        raise ValueError(msg)
+    first = int(first_frame)
+
+    window: list[np.ndarray] = []
+    state: _State | None = None
+    prev_pos = None
+    rot0 = None
+    for n, frame in enumerate(frames):
+        img = as_image(f"frame {first + n}", frame, dtype=np.float32)
+        if img.shape != cam.shape:
+            if rig is not None and camera is None:
+                rig.check_image_shape(img.shape, what=f"frame {first + n}")
+            msg = f"frame {first + n} has size {img.shape[1]}x{img.shape[0]}, the camera {cam.width_px}x{cam.height_px}"
+            raise ValueError(msg)
+        window.append(img)
+        if len(window) < 3:
+            continue
+        if len(window) > 3:
+            window.pop(0)
+        k = first + n - 1
+        if rot0 is None:
+            rot0 = _camera_rotation(spec, k - 1, None)
+        rmat = Rotation.from_rotvec(np.deg2rad(_camera_rotation(spec, k, rot0))).as_matrix()
+        p_prev, p_mid, p_next = (spec.camera_position(i) for i in (k - 1, k, k + 1))
+        _camera_rotation(spec, k + 1, rot0)
+        step_cam = rmat.T @ ((p_next - p_prev) / 2.0)  # world -> camera axes
+        baseline = float(np.linalg.norm(step_cam))
+
+        shape = cam.shape
+        rho_m = np.full(shape, np.nan)
+        var_m = np.full(shape, np.nan)
+        if baseline > 0:
+            res = static_stereo_edges(
+                window,
+                camera=cam,
+                baseline=baseline,
+                direction=step_cam,
+                sigma_px=sigma_px,
+                stencil=stencil,
+                min_cos=min_cos,
+                noise_std=noise_std,
+            )
+            ok = res.valid
+            ii = np.floor(res.rows[ok]).astype(np.int64)
+            jj = np.floor(res.cols[ok]).astype(np.int64)
+            rho = res.inverse_depth.rho[ok]
+            std = res.inverse_depth.rho_std[ok]
+            floor = min_std_px / (cam.focal_px * baseline)
+            std = np.where(np.isfinite(std), np.maximum(std, floor), floor)
+            rho_m[ii, jj] = rho
+            var_m[ii, jj] = std**2
+
+        if state is None:
+            state = _State(shape)
+        else:
+            disp = rmat.T @ (p_mid - prev_pos)
+            state = _predict(state, cam, disp, process_noise)
+        state = _update(state, rho_m, var_m, gate=gate, max_age=int(max_age))
+        prev_pos = p_mid
+        yield VideoDepthFrame(
+            index=k,
+            inverse_depth=state.rho.astype(np.float32),
+            inverse_depth_std=np.sqrt(state.var).astype(np.float32),
+            measured_inverse_depth=rho_m.astype(np.float32),
+            measured_inverse_depth_std=np.sqrt(var_m).astype(np.float32),
+            count=np.minimum(state.count, np.iinfo(np.uint16).max).astype(np.uint16),
+            camera_position=np.asarray(p_mid, dtype=float).copy(),
+            baseline=baseline,
+        )
+
+
+# ------------------------------------------------------------------ writing
+
+#: Arrays stored by :func:`write_video_npz`, each stacked over the frames.
+NPZ_ARRAYS = (
+    "depth",
+    "depth_std",
+    "inverse_depth",
+    "inverse_depth_std",
+    "measured_inverse_depth",
+    "measured_inverse_depth_std",
+)
+
+
+def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force: bool = False) -> Path:
+    """Write per-frame results to one ``.npz``, atomically (nothing is left on failure).
+
+    Holds ``index`` (N,), ``camera_position`` (N, 3), ``baseline`` (N,) and
+    the float32 ``(N, H, W)`` stacks of :data:`NPZ_ARRAYS` (NaN where
+    unknown); with ``camera`` also ``focal_px``, ``cx_px``, ``cy_px``.
+    """
+    from .io import atomic_write
+
+    results = list(results)
+    payload = {
+        "index": np.array([r.index for r in results], dtype=np.int64),
+        "camera_position": np.array([r.camera_position for r in results], dtype=float).reshape(-1, 3),
+        "baseline": np.array([r.baseline for r in results], dtype=float),
+    }
+    for name in NPZ_ARRAYS:
+        payload[name] = np.stack([np.asarray(getattr(r, name), dtype=np.float32) for r in results]) if results else np.zeros((0, 0, 0), np.float32)
+    if camera is not None:
+        payload.update(focal_px=np.float64(camera.focal_px), cx_px=np.float64(camera.cx_px), cy_px=np.float64(camera.cy_px))
+    return atomic_write(Path(path), lambda fh: np.savez_compressed(fh, **payload), force=force)
+
+
+def video_frame_names(index: int) -> tuple[str, str]:
+    """File names of one frame's depth and std maps in an output folder."""
+    return f"depth_{index:06d}.tif", f"depth_std_{index:06d}.tif"
+
+
+def write_video_frame(result: VideoDepthFrame, folder, *, force: bool = False) -> tuple[Path, Path]:
+    """Write one frame's fused depth and std as float32 TIFFs (NaN unknown), each atomically."""
+    from .io import write_array
+
+    folder = Path(folder)
+    a, b = video_frame_names(result.index)
+    return write_array(folder / a, result.depth, force=force), write_array(folder / b, result.depth_std, force=force)

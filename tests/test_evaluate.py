@@ -1,0 +1,243 @@
+"""nfdepth.evaluate, nfdepth.baselines and ``nfdepth evaluate``."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from nfdepth import baselines
+from nfdepth.cli import main
+from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
+from nfdepth.evaluate import disparity_errors, error_map_png, evaluate_scene, render_markdown, resolve_dataset, select_views
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _cli_has_evaluate():
+    from nfdepth.cli import _PLUGIN_COMMANDS
+
+    return "_cli_evaluate" in _PLUGIN_COMMANDS
+
+
+needs_cli = pytest.mark.skipif(not _cli_has_evaluate(), reason="_cli_evaluate not yet in nfdepth.cli._PLUGIN_COMMANDS")
+
+
+# ------------------------------------------------------------------ disparity_errors
+
+
+def test_disparity_errors_exact_values():
+    truth = np.array([[10.0, 10.0, 10.0, 10.0], [5.0, 5.0, np.nan, 20.0]])
+    est = np.array([[10.0, 11.0, 9.6, np.nan], [5.0, 7.0, 3.0, 20.4]])
+    # pairs with both finite: (10,10) (11,10) (9.6,10) (5,5) (7,5) (20.4,20); truth finite at 7 pixels
+    e = disparity_errors(est, truth)
+    assert e["points"] == 6 and e["truth_points"] == 7
+    assert e["density"] == pytest.approx(6 / 7)
+    err = np.array([0.0, 1.0, 0.4, 0.0, 2.0, 0.4])
+    rel = np.array([0.0, 0.1, 0.04, 0.0, 0.4, 0.02])
+    assert e["median_rel"] == pytest.approx(np.median(rel))  # (0.02 + 0.04) / 2
+    assert e["median_rel"] == pytest.approx(0.03)
+    assert e["p90_rel"] == pytest.approx(np.percentile(rel, 90))
+    assert e["bad_1px"] == pytest.approx(1 / 6)  # only the 2 px error; 1.0 is not > 1
+    assert e["bad_0_5px"] == pytest.approx(2 / 6)
+    assert e["mae_px"] == pytest.approx(err.mean())
+
+
+def test_disparity_errors_mask_and_empty():
+    truth = np.array([[1.0, 2.0], [4.0, np.nan]])
+    est = np.array([[1.5, np.nan], [4.0, 3.0]])
+    e = disparity_errors(est, truth, mask=np.array([[True, True], [False, True]]))
+    assert e["points"] == 1 and e["truth_points"] == 2 and e["density"] == 0.5
+    assert e["median_rel"] == pytest.approx(0.5) and e["mae_px"] == pytest.approx(0.5)
+    assert e["bad_0_5px"] == 0.0 and e["bad_1px"] == 0.0
+    empty = disparity_errors(np.full((2, 2), np.nan), truth)
+    assert empty["points"] == 0 and empty["density"] == 0.0 and math.isnan(empty["median_rel"])
+    with pytest.raises(ValueError, match="same shape"):
+        disparity_errors(np.zeros((2, 3)), truth)
+
+
+# ------------------------------------------------------------------ baselines, synthetic
+
+
+def _texture(shape=(120, 200), seed=0):
+    rng = np.random.default_rng(seed)
+    tex = ndimage.gaussian_filter(rng.normal(size=shape), 1.5)
+    return (tex - tex.min()) / (tex.max() - tex.min()) * 200 + 20
+
+
+def _row(d, n=3, reference=1, seed=0):
+    """Views t = k - reference steps from the reference: reference (r, c) seen at (r, c - t d)."""
+    tex = _texture(seed=seed)
+    if float(d).is_integer():
+        return [np.roll(tex, -int((k - reference) * d), axis=1) for k in range(n)]
+    return [ndimage.shift(tex, (0, -(k - reference) * d), order=3, mode="wrap") for k in range(n)]
+
+
+INNER = (slice(10, -10), slice(40, -40))  # off OpenCV's unmatched band (numDisparities columns) and the wrap seam
+
+
+@pytest.mark.parametrize("d", [4, 2.5, 1.3])
+def test_sgbm_and_bm_recover_constant_disparity(d):
+    views = _row(d)
+    s = baselines.sgbm_disparity(views[1], views[2], num_disparities=16)
+    b = baselines.stereo_bm_disparity(views[1], views[2], num_disparities=16)
+    for est in (s, b):
+        e = np.abs(est[INNER] - d)
+        assert np.isfinite(est[INNER]).mean() > 0.95
+        if float(d).is_integer():
+            # integer shift: the cost has an exact minimum; OpenCV's result is on a 1/16 px grid
+            assert np.nanmedian(e) <= 1 / 16 and np.nanpercentile(e, 90) <= 2 / 16
+        else:
+            # sub-pixel: parabola fit over integer costs (pixel locking) -> a few 1/16 px, well under 1/4 px
+            assert np.nanmedian(e) <= 0.2 and np.nanpercentile(e, 90) <= 0.3
+    assert s.dtype == np.float32
+    # the invalid band at the left (no match possible) is NaN, not (minDisparity - 1)
+    assert np.isnan(s[:, :8]).all()
+
+
+def test_pair_at_last_reference_is_mirrored():
+    views = _row(4, n=3, reference=2)
+    r = baselines.pair_disparity_at_reference(views, reference=2, num_disparities=16)
+    assert np.nanmedian(np.abs(r.disparity[INNER] - 4)) <= 1 / 16
+    assert r.runtime_s >= 0 and r.method == "sgbm"
+    # positions scale the pair to a neighbour step: spacing 2 -> half the raw disparity
+    r2 = baselines.pair_disparity_at_reference(views, reference=1, positions=[0, 2, 4], num_disparities=16)
+    assert np.nanmedian(r2.disparity[INNER]) == pytest.approx(2.0, abs=1 / 16)
+
+
+@pytest.mark.parametrize("method", ["dis", "farneback"])
+@pytest.mark.parametrize("d", [4, 2.5])
+def test_waxman_sinha_recovers_constant_disparity(method, d):
+    views = _row(d, n=4, reference=1)
+    r = baselines.waxman_sinha_disparity(views, reference=1, method=method)
+    e = np.abs(r.disparity[INNER] - d)
+    assert np.isfinite(r.disparity).all()
+    # dense flow on a smooth texture: sub-pixel by construction; DIS's patch fit has a few 1/100 px
+    # of bias between integers (0.05 px measured at 2.5 px), Farneback less
+    assert np.median(e) < 0.1 and np.percentile(e, 90) < 0.15
+    assert r.method == f"waxman_sinha/{method}"
+
+
+def test_baselines_bad_input():
+    a = _texture()
+    with pytest.raises(ValueError, match="multiple of 16"):
+        baselines.sgbm_disparity(a, a, num_disparities=20)
+    with pytest.raises(ValueError, match="same shape"):
+        baselines.sgbm_disparity(a, a[:, :100])
+    with pytest.raises(ValueError, match="mode"):
+        baselines.sgbm_disparity(a, a, mode="fast")
+    with pytest.raises(ValueError, match="reference"):
+        baselines.waxman_sinha_disparity([a, a], reference=2)
+    with pytest.raises(ValueError, match="strictly increasing"):
+        baselines.waxman_sinha_disparity([a, a], reference=0, positions=[1, 0])
+
+
+# ------------------------------------------------------------------ evaluate_scene, synthetic
+
+
+def _synthetic_scene(d=3.0, n=5, reference=2):
+    views = [v.astype(np.float32) for v in _row(d, n=n, reference=reference, seed=1)]
+    truth = np.full(views[0].shape, d, np.float32)
+    truth[:, :20] = np.nan
+    colour = np.repeat(np.clip(views[reference], 0, 255).astype(np.uint8)[..., None], 3, axis=2)
+    return MultiViewScene("synthetic", views, reference, truth, None, None, None, 0.0, colour, "test")
+
+
+def test_select_views():
+    assert select_views(5, 2, "three") == [1, 2, 3]
+    assert select_views(7, 0, "three") == [0, 1, 2]
+    assert select_views(7, 6, "three") == [4, 5, 6]
+    assert select_views(2, 0, "three") == [0, 1]
+    assert select_views(4, 1, "all") == [0, 1, 2, 3]
+    with pytest.raises(ValueError, match="three"):
+        select_views(4, 1, "two")
+
+
+def test_evaluate_scene_shape_and_table(tmp_path):
+    res = evaluate_scene(_synthetic_scene(), views="three", methods=("nfdepth", "sgbm", "waxman_sinha"), keep_maps=True)
+    assert res["views"] == [1, 2, 3] and res["view_count"] == 3
+    assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
+    for m, entry in res["methods"].items():
+        assert entry["runtime_s"] >= 0
+        assert entry["dense"]["points"] > 0
+        assert set(entry["edges"]) >= {"points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px"}
+    # peers are scored at exactly nfdepth's edge points
+    assert res["methods"]["waxman_sinha"]["edges"]["truth_points"] == res["methods"]["nfdepth"]["edges"]["points"]
+    assert res["methods"]["waxman_sinha"]["dense"]["median_rel"] < 0.03
+    table = render_markdown(res)
+    assert table.count("\n") == 7 and "sgbm (at nfdepth edges)" in table
+    png = error_map_png(tmp_path / "e.png", res["maps"]["sgbm"], res["truth"])
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    only = evaluate_scene(_synthetic_scene(), views="three", methods=["sgbm"])
+    assert only["methods"]["sgbm"]["edges"] is None
+    with pytest.raises(ValueError, match="methods"):
+        evaluate_scene(_synthetic_scene(), methods=["magic"])
+
+
+def test_resolve_dataset_unknown(tmp_path):
+    with pytest.raises(ValueError, match="unknown dataset 'nosuch'"):
+        resolve_dataset("nosuch", data=tmp_path)
+    with pytest.raises(ValueError, match="holds no known scene"):
+        resolve_dataset(str(tmp_path), data=tmp_path)
+
+
+# ------------------------------------------------------------------ the command line
+
+
+@needs_cli
+def test_cli_unknown_dataset_one_line(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "evaluate", "nosuch", "--data", str(tmp_path))
+    assert code == 2
+    assert err.startswith("nfdepth: error: unknown dataset 'nosuch'") and err.count("\n") == 1
+
+
+@needs_cli
+def test_cli_missing_data_root(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(tmp_path / "absent"))
+    assert code == 5 and err.count("\n") == 1 and "data folder not found" in err
+
+
+@needs_cli
+def test_cli_bad_views_and_json(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--views", "two")
+    assert code == 2 and "--views" in err
+    code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--json", str(tmp_path / "no" / "r.json"))
+    assert code == 4 and "does not exist" in err
+
+
+def _real_root():
+    try:
+        root = data_root()
+    except DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
+    if "tsukuba" not in list_scenes(root):
+        pytest.skip(f"tsukuba not found under {root}")
+    return root
+
+
+@pytest.mark.data
+@needs_cli
+def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
+    root = _real_root()
+    js = tmp_path / "t.json"
+    code, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(root), "--views", "three", "--json", str(js), "--maps", str(tmp_path / "maps"))
+    assert code == 0, err
+    assert "tsukuba" in out and "nfdepth (edges)" in out and "waxman_sinha (dense)" in out
+    data = json.loads(js.read_text())
+    assert isinstance(data, list) and len(data) == 1
+    res = data[0]
+    assert res["scene"] == "tsukuba" and res["views"] == [1, 2, 3] and res["shape"] == [288, 384]
+    assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
+    keys = {"points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px"}
+    for entry in res["methods"].values():
+        assert set(entry) == {"runtime_s", "edges", "dense"}
+        assert set(entry["edges"]) == keys and set(entry["dense"]) == keys
+        assert 0 < entry["dense"]["density"] <= 1
+        # every method is far better than chance on Tsukuba (disparity 5..14 px)
+        assert entry["dense"]["median_rel"] < 0.1
+    assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3

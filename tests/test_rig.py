@@ -1,0 +1,295 @@
+"""Rig files: parsing, round trips, validation messages, and ``nfdepth dynamic``."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+try:
+    import tomllib
+except ImportError:  # Python 3.10
+    import tomli as tomllib
+
+import nfdepth.cli
+from nfdepth import synthetic
+from nfdepth.camera import RigidMotion
+from nfdepth.cli import main
+from nfdepth.rig import (
+    Rig,
+    RigError,
+    dynamic_stereo_from_rig,
+    edge_depth_maps,
+    load_poses,
+    load_rig,
+    rig_from_dict,
+    rig_to_toml,
+    stereo_options_from_rig,
+)
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+PAPER_RIG = EXAMPLES / "paper_pyramid_rig.toml"
+RAIL_RIG = EXAMPLES / "rail_camera_rig.toml"
+
+BASE = {
+    "camera": {"focal_px": 100.0, "width_px": 200, "height_px": 200},
+    "motion": {"velocity": [2.0, 0.0, 0.0], "rotation_deg": [0.0, 0.0, 0.0], "frame_interval": 1.0},
+    "stereo": {"baseline": 2.0, "axis": "x"},
+    "video": {"velocity": [1.0, 0.0, 0.0]},
+}
+
+
+@pytest.fixture(autouse=True)
+def plugin(monkeypatch):
+    monkeypatch.setattr(nfdepth.cli, "_PLUGIN_COMMANDS", ("_cli_rig",))
+
+
+def run_cli(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# ------------------------------------------------------------------ parsing
+
+
+def test_paper_example_rig():
+    rig = load_rig(PAPER_RIG)
+    assert rig.camera.focal_px == 100.0 and rig.camera.shape == (200, 200)
+    assert rig.camera.cx_px == 99.5 and rig.camera.cy_px == 99.5
+    # a camera moving with T = (2, 0, 0) sees the scene move with V = -T
+    np.testing.assert_array_equal(rig.relative_motion().translation, [-2.0, 0.0, 0.0])
+    np.testing.assert_array_equal(rig.relative_motion().rotation, [0.0, 0.0, 0.0])
+    assert rig.frame_interval == 1.0
+    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 2.0, "axis": "x", "positions": None}
+    # the example matches the renderer's paper scene
+    scene = synthetic.paper_dynamic_sequence(1)
+    np.testing.assert_allclose(rig.relative_motion().translation, scene.relative_motion.translation)
+    assert rig.camera == scene.camera
+
+
+def test_rail_example_rig():
+    rig = load_rig(RAIL_RIG)
+    assert rig.camera.shape == (480, 640)
+    np.testing.assert_array_equal(rig.video.camera_position(3), [0.006, 0.0, 0.0])
+    assert rig.motion is None
+    with pytest.raises(RigError, match=r"no \[motion\] section"):
+        rig.relative_motion()
+
+
+def test_rotation_degrees_converted_to_radians():
+    d = copy.deepcopy(BASE)
+    d["motion"]["rotation_deg"] = [0.0, 0.0, 0.5]
+    m = rig_from_dict(d).relative_motion()
+    assert isinstance(m, RigidMotion)
+    np.testing.assert_allclose(m.rotation, [0.0, 0.0, -np.deg2rad(0.5)])
+
+
+@pytest.mark.parametrize("path", [PAPER_RIG, RAIL_RIG])
+def test_round_trip_examples(path):
+    rig = load_rig(path)
+    again = rig_from_dict(tomllib.loads(rig_to_toml(rig)))
+    assert again == rig
+
+
+def test_round_trip_all_sections(tmp_path):
+    d = copy.deepcopy(BASE)
+    d["camera"].update(cx_px=101.25, cy_px=98.0)
+    d["stereo"] = {"baseline": 0.5, "direction": [0.0, 2.0, 0.0], "positions": [0.0, 1.0, 2.5]}
+    d["video"] = {"positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.25, 0.0, 0.0]]}
+    rig = rig_from_dict(d)
+    np.testing.assert_array_equal(rig.stereo.direction, [0.0, 1.0, 0.0])
+    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 0.5, "axis": "y", "positions": [0.0, 1.0, 2.5]}
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+    (tmp_path / "p.csv").write_text("frame,x,y,z\n0,0,0,0\n1,0.5,0,0\n2,1.0,0,0\n")
+    d["video"] = {"poses": "p.csv"}
+    rig = rig_from_dict(d, base_dir=tmp_path)
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+
+
+def test_poses_relative_to_rig_folder(tmp_path):
+    sub = tmp_path / "rig"
+    sub.mkdir()
+    (sub / "poses.csv").write_text("frame,x,y,z,rx,ry,rz\n# comment\n0,0,0,0,0,0,0\n1,0.5,0,0,0,0,0\n2,1.0,0.1,0,0,0,0\n")
+    (sub / "rig.toml").write_text('[camera]\nfocal_px = 50\nwidth_px = 20\nheight_px = 10\n[video]\nposes = "poses.csv"\n')
+    rig = load_rig(sub / "rig.toml")
+    np.testing.assert_array_equal(rig.video.camera_position(2), [1.0, 0.1, 0.0])
+    with pytest.raises(RigError, match=r"no row for frame 3"):
+        rig.video.camera_position(3)
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda d: d.pop("camera"), r"camera is missing"),
+        (lambda d: d["camera"].pop("focal_px"), r"camera\.focal_px is missing"),
+        (lambda d: d["camera"].update(focal_px=-100.0), r"camera\.focal_px = -100\.0: expected a number > 0"),
+        (lambda d: d["camera"].update(focal_px="100"), r"camera\.focal_px = '100': expected a finite number"),
+        (lambda d: d["camera"].update(width_px=200.5), r"camera\.width_px = 200\.5: expected a positive integer"),
+        (lambda d: d["camera"].update(height_px=0), r"camera\.height_px = 0: expected a positive integer"),
+        (lambda d: d["camera"].update(focal=100), r"camera\.focal: unknown key"),
+        (lambda d: d.update(extra={}), r"rig\.extra: unknown key"),
+        (lambda d: d.update(camera=5), r"camera = 5: expected a table"),
+        (lambda d: d["motion"].pop("velocity"), r"motion\.velocity is missing"),
+        (lambda d: d["motion"].update(velocity=[0.0, 0.0, 0.0]), r"motion\.velocity = \[0\.0, 0\.0, 0\.0\]: expected a non-zero translation"),
+        (lambda d: d["motion"].update(velocity=[1.0, 2.0]), r"motion\.velocity = \[1\.0, 2\.0\]: expected 3 finite numbers"),
+        (lambda d: d["motion"].update(rotation_deg="fast"), r"motion\.rotation_deg = 'fast': expected 3 finite numbers"),
+        (lambda d: d["motion"].update(frame_interval=0), r"motion\.frame_interval = 0: expected a number > 0"),
+        (lambda d: d["stereo"].update(baseline=0.0), r"stereo\.baseline = 0\.0: expected a number > 0"),
+        (lambda d: d["stereo"].pop("baseline"), r"stereo\.baseline is missing"),
+        (lambda d: d["stereo"].update(axis="z"), r"stereo\.axis = 'z': expected \"x\" or \"y\""),
+        (lambda d: d["stereo"].update(direction=[1, 0, 0]), r"stereo: axis and direction contradict each other"),
+        (lambda d: d["stereo"].update(axis=None) or d["stereo"].pop("axis") or d["stereo"].update(direction=[0, 0, 0]), r"stereo\.direction = \[0, 0, 0\]: expected a non-zero"),
+        (lambda d: d["stereo"].update(positions=[0, 2, 1]), r"stereo\.positions = \[0, 2, 1\]: expected strictly increasing"),
+        (lambda d: d["stereo"].update(positions=[0]), r"stereo\.positions = \[0\]: expected a list of 2 or more"),
+        (lambda d: d["video"].update(positions=[[0, 0, 0]] * 3), r"video: velocity and positions contradict each other"),
+        (lambda d: d["video"].update(poses="p.csv"), r"video: velocity and poses contradict each other"),
+        (lambda d: d["video"].pop("velocity"), r"video: expected one of velocity, positions, poses"),
+        (lambda d: d["video"].update(velocity=[0, 0, 0]), r"video\.velocity = \[0, 0, 0\]: expected a non-zero camera translation"),
+        (lambda d: d["video"].pop("velocity") and d["video"].update(positions=[[0, 0]]), r"video\.positions = \[\[0, 0\]\]: expected a list of 3 or more"),
+    ],
+)
+def test_validation_errors(edit, match):
+    d = copy.deepcopy(BASE)
+    edit(d)
+    with pytest.raises(RigError, match=match):
+        rig_from_dict(d)
+
+
+def test_stereo_direction_must_be_axis_for_stereo_command():
+    d = copy.deepcopy(BASE)
+    d["stereo"] = {"baseline": 1.0, "direction": [1.0, 1.0, 0.0]}
+    rig = rig_from_dict(d)
+    with pytest.raises(RigError, match=r"stereo\.direction = .*expected \[1, 0, 0\] or \[0, 1, 0\]"):
+        stereo_options_from_rig(rig)
+    with pytest.raises(RigError, match=r"no \[stereo\] section"):
+        stereo_options_from_rig(rig_from_dict({"camera": BASE["camera"]}))
+
+
+def test_load_rig_file_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        load_rig(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[camera\nfocal_px = 1\n")
+    with pytest.raises(RigError, match=r"bad\.toml'?: not valid TOML"):
+        load_rig(bad)
+    neg = tmp_path / "neg.toml"
+    neg.write_text("[camera]\nfocal_px = -100\nwidth_px = 200\nheight_px = 200\n")
+    with pytest.raises(RigError, match=r"neg\.toml': camera\.focal_px = -100: expected a number > 0"):
+        load_rig(neg)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("", r"the file is empty"),
+        ("frame,x,y\n0,0,0\n", r"line 1: header 'frame,x,y'"),
+        ("frame,x,y,z\n0,0,0\n", r"line 2: 3 columns: expected 4"),
+        ("frame,x,y,z\n0.5,0,0,0\n", r"line 2: frame = '0.5': expected an integer"),
+        ("frame,x,y,z\n0,0,abc,0\n", r"line 2: y = 'abc': expected a finite number"),
+        ("frame,x,y,z\n1,0,0,0\n0,1,0,0\n", r"line 3: frame indices must be strictly increasing"),
+        ("frame,x,y,z\n", r"no data rows"),
+    ],
+)
+def test_poses_errors(tmp_path, text, match):
+    p = tmp_path / "p.csv"
+    p.write_text(text)
+    with pytest.raises(RigError, match=match):
+        load_poses(p)
+
+
+def test_image_size_checked_at_use():
+    rig = rig_from_dict(BASE)
+    rig.check_image_shape((200, 200))
+    with pytest.raises(RigError, match=r"camera\.width_px x camera\.height_px = 200x200 does not match image I1 \(160x120\)"):
+        dynamic_stereo_from_rig([np.zeros((120, 160))] * 5, rig)
+    with pytest.raises(ValueError, match="exactly 5 images"):
+        dynamic_stereo_from_rig([np.zeros((200, 200))] * 4, rig)
+
+
+# ------------------------------------------------------------------ nfdepth dynamic
+
+
+@pytest.fixture(scope="module")
+def paper_scene():
+    return synthetic.paper_dynamic_sequence(1)
+
+
+@pytest.fixture
+def paper_pngs(tmp_path, paper_scene):
+    paths = []
+    for k, frame in enumerate(paper_scene.frames, 1):
+        p = tmp_path / f"I{k}.png"
+        assert cv2.imwrite(str(p), np.round(frame * 256).astype(np.uint16))  # 16-bit: no 8-bit quantisation
+        paths.append(p)
+    return paths
+
+
+def test_library_matches_truth(paper_scene):
+    rig = load_rig(PAPER_RIG)
+    res = dynamic_stereo_from_rig(list(paper_scene.frames), rig)
+    ok = res.valid
+    err = np.abs(res.depth[ok] - paper_scene.depth_at(res.rows[ok], res.cols[ok])) / paper_scene.depth_at(res.rows[ok], res.cols[ok])
+    assert ok.sum() > 300 and np.max(err) < 0.02
+    depth, std = edge_depth_maps(res)
+    assert depth.shape == (200, 200) and np.isfinite(depth).sum() == ok.sum()
+    assert np.all(np.isfinite(std[np.isfinite(depth)]))
+
+
+def test_dynamic_cli_end_to_end(tmp_path, capsys, paper_scene, paper_pngs):
+    out, unc, csv, ply, png = (tmp_path / n for n in ("z.tif", "s.tif", "z.csv", "z.ply", "z.png"))
+    code, stdout, err = run_cli(
+        capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", out, "--uncertainty", unc, "--csv", csv, "--ply", ply, "--preview", png
+    )
+    assert code == 0, err
+    assert "edge points of I3" in stdout
+    pts = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert pts.shape[0] > 300
+    true = paper_scene.depth_at(pts[:, 0], pts[:, 1])
+    rel = np.abs(pts[:, 2] - true) / true
+    assert np.median(rel) < 0.01 and np.max(rel) < 0.03  # measured: median 0.3 %, max 0.7 %
+    assert np.all(pts[:, 3] >= 0)
+    import tifffile
+
+    z = tifffile.imread(out)
+    assert z.shape == (200, 200) and z.dtype == np.float32
+    assert np.isfinite(z).sum() == pts.shape[0]
+    ii, jj = np.floor(pts[:, 0]).astype(int), np.floor(pts[:, 1]).astype(int)
+    np.testing.assert_allclose(z[ii, jj], pts[:, 2], rtol=1e-5)
+    assert ply.read_bytes().startswith(b"ply") and png.read_bytes()[:4] == b"\x89PNG"
+    # an existing output is kept without --force
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", out)
+    assert code == 4 and "--force" in err and err.count("\n") == 1
+
+
+def _write_rig(tmp_path, text, name="rig.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    ("rig_text", "n_images", "code", "fragment"),
+    [
+        ("[camera]\nfocal_px = -100\nwidth_px = 200\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\n", 5, 2, "camera.focal_px = -100: expected a number > 0"),
+        ("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\nposition = [0, 0, 0]\n", 5, 2, "motion.position: unknown key"),
+        ("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n", 5, 2, "no [motion] section"),
+        ("[camera]\nfocal_px = 100\nwidth_px = 320\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\n", 5, 2, "= 320x200 (rig.toml) does not match I1 'I1.png' (200x200)"),
+        (PAPER_RIG.read_text(), 4, 2, "dynamic needs exactly 5 images"),
+        ("not = [toml", 5, 2, "not valid TOML"),
+    ],
+)
+def test_dynamic_cli_errors(tmp_path, capsys, paper_pngs, rig_text, n_images, code, fragment):
+    rig = _write_rig(tmp_path, rig_text)
+    got, out, err = run_cli(capsys, "dynamic", *paper_pngs[:n_images], "--rig", rig, "--out", tmp_path / "z.tif")
+    assert got == code, err
+    assert fragment in err and err.startswith("nfdepth: error:") and err.count("\n") == 1
+    assert not (tmp_path / "z.tif").exists()
+
+
+def test_dynamic_cli_missing_rig(tmp_path, capsys, paper_pngs):
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", tmp_path / "nope.toml", "--out", tmp_path / "z.tif")
+    assert code == 3 and "nope.toml" in err and err.count("\n") == 1
