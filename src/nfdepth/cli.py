@@ -211,6 +211,7 @@ def _cmd_demo(args) -> int:
     from .experiments import run_paper_experiment
     from .io import atomic_write, depth_to_points, write_array, write_ply
     from .stereo import static_stereo
+    from .synthetic import paper_pyramid, static_sequence
 
     out = _check_out_dir(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -231,14 +232,22 @@ def _cmd_demo(args) -> int:
     # job as `nfdepth stereo --edges-only` on them: a depth map and a point cloud.
     scene = results["static"].scene
     example = out / "example"
-    example.mkdir(exist_ok=True)
-    names = []
-    for k, frame in enumerate(scene.frames):
-        path = example / f"pyramid_view{k}.png"
+    (example / "rail").mkdir(parents=True, exist_ok=True)
+
+    def write_png16(path, frame):
         data = np.round(np.clip(frame, 0, 255) * 256.0).astype(np.uint16)
         ok, buf = cv2.imencode(".png", data)
-        atomic_write(path, lambda fh, b=buf: fh.write(b.tobytes()), force=True)
-        names.append(path)
+        atomic_write(path, lambda fh: fh.write(buf.tobytes()), force=True)
+        return path
+
+    names = [write_png16(example / f"pyramid_view{k}.png", f) for k, f in enumerate(scene.frames)]
+    for k, frame in enumerate(results["exp1"].scene.frames, 1):
+        write_png16(example / f"dynamic_I{k}.png", frame)
+    # A camera on a rail passing the still pyramid, 1 unit per frame along +X
+    # (the [video] section of examples/paper_pyramid_rig.toml).
+    rail = static_sequence(paper_pyramid(), scene.camera, n_views=8, camera_step=(1.0, 0.0, 0.0))
+    for k, frame in enumerate(rail.frames):
+        write_png16(example / "rail" / f"frame_{k:03d}.png", frame)
     views = [np.asarray(f, dtype=np.float32) for f in scene.frames]
     stereo = static_stereo(views, reference=scene.reference_index, edges_only=True)
     depth = stereo.depth(focal_px=scene.camera.focal_px, baseline=2.0)
