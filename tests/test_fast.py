@@ -6,10 +6,20 @@ import cv2
 import numpy as np
 import pytest
 
-from nfdepth import bench
+from nfdepth import bench, fast
 from nfdepth.edges import select_edge_points
 from nfdepth.fast import StreamingNormalFlow, _percentile_linear, normal_flow_edges
 from nfdepth.normal_flow import gaussian_smooth, normal_flow
+
+
+@pytest.fixture(params=["numba", "numpy"], autouse=True)
+def backend(request, monkeypatch):
+    """Run every test on the fused numba kernels and on the numpy/OpenCV fallback."""
+    if request.param == "numba" and not fast.USE_NUMBA:
+        pytest.skip("numba not installed (or NFDEPTH_NO_NUMBA set)")
+    monkeypatch.setattr(fast, "USE_NUMBA", request.param == "numba")
+    fast._local.ws = None
+    return request.param
 
 
 def _texture(shape, seed=0):
@@ -192,14 +202,18 @@ def test_fast_bad_frames():
 
 
 @pytest.mark.parametrize("n", [4096, 5000, 12345, 307_200])
-def test_percentile_matches_numpy(n):
+def test_percentile_matches_numpy(n, backend):
+    if backend == "numba":
+        pytest.skip("backend-independent")
     rng = np.random.default_rng(n)
     for values in (rng.random(n).astype(np.float32), rng.exponential(size=n).astype(np.float32), np.round(rng.random(n) * 10).astype(np.float32)):
         arr = values.reshape(-1, 64) if n % 64 == 0 else values
         assert _percentile_linear(arr, 99.0) == float(np.percentile(arr, 99.0))
 
 
-def test_bench_records_well_formed():
+def test_bench_records_well_formed(backend):
+    if backend == "numpy":
+        pytest.skip("bench runs the default backend only")
     records = bench.run_benchmarks(quick=True, sizes=[(120, 160)], repeats=3)
     names = {r["name"] for r in records}
     assert {"nf_edges", "nf_stream_frame", "cv_sgbm", "cv_bm", "cv_dis_fast", "cv_dis_medium", "floor_blur3", "floor_copy3"} <= names
@@ -212,3 +226,37 @@ def test_bench_records_well_formed():
         assert r["ratio_to_sgbm"] > 0 and r["ratio_to_floor"] > 0
     table = bench.render_markdown(records)
     assert table.startswith("| case |") and "nf_edges" in table
+
+
+def test_deterministic_and_streaming_bit_identical(backend):
+    # Same inputs, fresh or reused buffers, from scratch or streamed: the same bits.
+    frames = _sequence((61, 83), n=5, shift=(0.5, 0.4), seed=7)
+    first = [x.copy() for x in normal_flow_edges(frames[:3], sigma_px=1.6)]
+    fast._local.ws = None
+    for _ in range(2):
+        again = normal_flow_edges(frames[:3], sigma_px=1.6)
+        for x, y in zip(again, first):
+            np.testing.assert_array_equal(x, y)
+    if backend != "numba":
+        return
+    stream = StreamingNormalFlow(sigma_px=1.6)
+    for t, f in enumerate(frames):
+        got = stream.push(f)
+        if t >= 2:
+            want = normal_flow_edges(frames[t - 2 : t + 1], sigma_px=1.6)
+            for x, y in zip(got, want):
+                np.testing.assert_array_equal(x, y)
+
+
+def test_tiny_images_and_window_larger_than_image():
+    # Structure-tensor window wider than the cell grid: reflected borders as cv2's.
+    frames = _sequence((9, 11), seed=4)
+    opts = {"min_gradient": 0.0, "max_corner_ratio": 1.0, "border_px": 0}
+    g, sel = _reference(frames, sigma_px=1.0, corner_window_px=3.0, **opts)
+    res = normal_flow_edges(frames, sigma_px=1.0, corner_window_px=3.0, **opts)
+    np.testing.assert_array_equal(res.mask, sel.mask)
+    np.testing.assert_allclose(res.magnitude, g.magnitude, rtol=0, atol=1e-5 * float(g.magnitude.max()))
+    for shape in ((2, 2), (2, 7), (7, 2)):
+        fr = [np.arange(shape[0] * shape[1], dtype=np.float32).reshape(shape) * (t + 1) for t in range(3)]
+        out = normal_flow_edges(fr, sigma_px=0.8, border_px=0)
+        assert out.vn.shape == (shape[0] - 1, shape[1] - 1)

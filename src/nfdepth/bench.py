@@ -18,6 +18,12 @@ Cases (per image size and scene):
 ``floor_blur3``         three ``cv2.GaussianBlur`` (sigma as nfdepth's) of the float32 frames
 ``floor_copy3``         a copy of the three float32 frames
 
+``ratio_to_floor`` is a case's median over ``floor_blur3``'s; ``ratio_to_nf_edges``
+over ``nf_edges``'s (for ``nf_stream_frame``: streaming cost per frame ÷ from scratch).
+The fast path runs on the fused numba kernels when numba is installed (the
+environment record says which backend ran); numba is single-threaded here,
+so only ``threads`` (OpenCV) matters.
+
 Peak memory is measured with :mod:`tracemalloc` in a separate, untimed call:
 it counts every NumPy array (including the arrays OpenCV returns, which
 NumPy allocates) and Python objects, not OpenCV's internal scratch buffers.
@@ -254,6 +260,8 @@ def run_benchmarks(
                             "bytes_per_px": peak / (H * W),
                             "ratio_to_sgbm": ms / med["cv_sgbm"],
                             "ratio_to_floor": ms / med["floor_blur3"],
+                            # per-frame cost relative to the same triple from scratch
+                            "ratio_to_nf_edges": ms / med["nf_edges"],
                         }
                     )
                     records.append(rec)
@@ -276,22 +284,28 @@ def _add_scaling(records):
 
 def render_markdown(records) -> str:
     """A markdown table of the records."""
-    head = "| case | scene | size | Mpx | median ms | fps | ns/px | ns/px vs smallest | peak MB | B/px | × SGBM | × floor |"
-    lines = [head, "|" + "---|" * 12]
+    head = "| case | scene | size | Mpx | median ms | fps | ns/px | ns/px vs smallest | peak MB | B/px | × SGBM | × floor | × nf_edges |"
+    lines = [head, "|" + "---|" * 13]
     for r in records:
         size = f"{r['width']}×{r['height']}"
         if r.get("median_ms") is None:
-            lines.append(f"| {r['name']} | {r['scene']} | {size} | {r['megapixels']} | {r.get('skipped', 'skipped')} |  |  |  |  |  |  |  |")
+            lines.append(f"| {r['name']} | {r['scene']} | {size} | {r['megapixels']} | {r.get('skipped', 'skipped')} |  |  |  |  |  |  |  |  |")
             continue
         lines.append(
             f"| {r['name']} | {r['scene']} | {size} | {r['megapixels']:.1f} | {r['median_ms']:.2f} | {r['fps']:.1f} | "
             f"{r['ns_per_px']:.1f} | {r.get('ns_per_px_vs_smallest', 1.0):.2f} | {r['peak_bytes'] / 1e6:.1f} | "
-            f"{r['bytes_per_px']:.1f} | {r['ratio_to_sgbm']:.3f} | {r['ratio_to_floor']:.2f} |"
+            f"{r['bytes_per_px']:.1f} | {r['ratio_to_sgbm']:.3f} | {r['ratio_to_floor']:.2f} | {r['ratio_to_nf_edges']:.2f} |"
         )
     return "\n".join(lines)
 
 
 def _environment() -> dict:
+    from . import fast
+
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - optional
+        numba = None
     return {
         "python": platform.python_version(),
         "numpy": np.__version__,
@@ -299,6 +313,8 @@ def _environment() -> dict:
         "machine": platform.machine(),
         "processor": platform.processor(),
         "cpu_count": os.cpu_count(),
+        "nfdepth_fast_backend": "numba" if fast.USE_NUMBA else "numpy/OpenCV",
+        "numba": getattr(numba, "__version__", None),
     }
 
 

@@ -37,6 +37,21 @@ with far fewer passes over the image:
   more than a blur (``np.arctan2``) or is not deterministic (``cv2.phase``'s
   SIMD path depends on buffer alignment).
 
+**Backends.** With numba installed (``USE_NUMBA``; set ``NFDEPTH_NO_NUMBA=1``
+to force the fallback) everything after the smoothing runs as two compiled,
+single-threaded loops (``fastmath=False``: bit-identical across runs, buffers
+and thread counts): one pass over the cell grid (combined stencils, ``I_t``,
+``|grad I|``, ``vn``, Laplacian signs in cv2's own summation order, the list
+of zero-crossing cells), then, after the percentile (exact, as
+``np.percentile``), one pass over the rows holding strong candidates:
+structure tensor (float32 separable window, reflected borders as cv2's)
+evaluated only there, float32 ``atan2`` and the eigenvalue test (float64) at
+the candidates. It blurs the three frames separately (3 Gaussian passes), so
+:class:`StreamingNormalFlow` keeps only the smoothed frames and a new frame
+costs one Gaussian pass plus the fused work; streamed and from-scratch
+results are bit-identical. Without numba the numpy/OpenCV path below runs
+(first numba call compiles, ~9 s; cached on disk afterwards, ~0.4 s).
+
 :class:`StreamingNormalFlow` keeps each frame's smoothed image (and its cell
 mean) in a ring, so a video costs one Gaussian pass per new frame plus the
 per-triple work.
@@ -58,6 +73,8 @@ NaN off the candidate edge points, see above):
 
 from __future__ import annotations
 
+import math
+import os
 import sys
 import threading
 from collections import deque
@@ -69,7 +86,16 @@ import numpy as np
 from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite
 from .normal_flow import _TEMPORAL_WEIGHTS, STENCILS
 
-__all__ = ["NormalFlowEdges", "normal_flow_edges", "StreamingNormalFlow"]
+try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
+    from numba import njit as _njit
+except ImportError:  # pragma: no cover - depends on the environment
+    _njit = None
+
+#: True when the fused numba kernels are used (numba importable and
+#: ``NFDEPTH_NO_NUMBA`` unset). Tests flip it to cover both paths.
+USE_NUMBA = _njit is not None and not os.environ.get("NFDEPTH_NO_NUMBA")
+
+__all__ = ["NormalFlowEdges", "normal_flow_edges", "StreamingNormalFlow", "USE_NUMBA"]
 
 _TWO_PI = np.float32(2.0 * np.pi)
 _PI = np.float32(np.pi)
@@ -159,23 +185,11 @@ def _gauss_kernel(sigma_px: float, radius_sigmas: float) -> np.ndarray:
 # ----------------------------------------------------------------- workspace
 
 
-class _Workspace:
-    """Reusable buffers for one image size (one thread): 6 float32 + 3 bool images, 27 B/px."""
+class _Pool:
+    """Recycled output sets for one image size (see :meth:`outputs`)."""
 
     def __init__(self, shape):
-        H, W = shape
-        h, w = H - 1, W - 1
-        f32 = np.float32
         self.shape = shape
-        self.A = np.empty((H, W), f32)  # weighted sum -> Laplacian -> product
-        self.D = np.empty((H, W), f32)  # f2 - f0 -> smoothed middle frame -> product
-        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum -> product
-        self.gt = np.empty((H, W), f32)  # I_t at cells ([:h, :w])
-        self.gc = np.empty((H, W), f32)  # I_col at cells ([:h, :w])
-        self.gr = np.empty((H, W), f32)  # I_row at cells ([:h, :w])
-        self.b1 = np.empty((H, W), bool)
-        self.b2 = np.empty((H, W), bool)
-        self.b3 = np.empty((h, w), bool)
         self.pool: list = []  # recycled output sets (vn, alpha, mag, mask)
 
     def outputs(self):
@@ -204,13 +218,46 @@ class _Workspace:
         return item[:4]
 
 
+class _Workspace(_Pool):
+    """Reusable buffers of the numpy/OpenCV path (one size, one thread): 6 float32 + 3 bool images, 27 B/px."""
+
+    def __init__(self, shape):
+        super().__init__(shape)
+        H, W = shape
+        h, w = H - 1, W - 1
+        f32 = np.float32
+        self.A = np.empty((H, W), f32)  # weighted sum -> Laplacian -> product
+        self.D = np.empty((H, W), f32)  # f2 - f0 -> smoothed middle frame -> product
+        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum -> product
+        self.gt = np.empty((H, W), f32)  # I_t at cells ([:h, :w])
+        self.gc = np.empty((H, W), f32)  # I_col at cells ([:h, :w])
+        self.gr = np.empty((H, W), f32)  # I_row at cells ([:h, :w])
+        self.b1 = np.empty((H, W), bool)
+        self.b2 = np.empty((H, W), bool)
+        self.b3 = np.empty((h, w), bool)
+
+
+class _NbWorkspace(_Pool):
+    """Reusable buffers of the numba path: 3 smoothed frames, I_col, I_row and the candidate list (24 B/px)."""
+
+    def __init__(self, shape):
+        super().__init__(shape)
+        H, W = shape
+        h, w = H - 1, W - 1
+        self.G = np.empty((3, H, W), np.float32)
+        self.gc = np.empty((h, w), np.float32)
+        self.gr = np.empty((h, w), np.float32)
+        self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
+
+
 _local = threading.local()
 
 
-def _workspace(shape) -> _Workspace:
+def _workspace(shape, cls=None):
+    cls = cls or (_NbWorkspace if USE_NUMBA else _Workspace)
     ws = getattr(_local, "ws", None)
-    if ws is None or ws.shape != shape:
-        ws = _Workspace(shape)
+    if ws is None or ws.shape != shape or type(ws) is not cls:
+        ws = cls(shape)
         _local.ws = ws
     return ws
 
@@ -245,6 +292,27 @@ class _Kernels:
         self.k_row = np.ascontiguousarray(k_col.T).astype(np.float32)
         self.box = np.full((2, 2), 0.25, np.float32)
         self.tg = _gauss_kernel(p.corner_window_px, 3.0).astype(np.float32)
+        # numba path: float32 constants, as the reference's float32 arithmetic uses them
+        f32 = np.float32
+        self.nb_weights = tuple(f32(x) for x in w)
+        self.kc1, self.kc2 = f32(0.75), f32(1.0 / 12.0)
+        self.matched = p.stencil == "matched"
+        self.tdiv = f32(2.0 * p.frame_interval)
+        self._maps: dict = {}
+
+    def border_maps(self, h, w):
+        """Index maps (cv2 BORDER_REFLECT) of the structure-tensor window's padded rows and columns."""
+        key = (h, w)
+        m = self._maps.get(key)
+        if m is None:
+            R = (self.tg.size - 1) // 2
+            m = tuple(
+                np.array([cv2.borderInterpolate(i - R, n, cv2.BORDER_REFLECT) for i in range(n + 2 * R)], np.int64) for n in (h, w)
+            )
+            if len(self._maps) > 8:
+                self._maps.clear()
+            self._maps[key] = m
+        return m
 
 
 _kernel_cache: dict = {}
@@ -310,6 +378,268 @@ def _percentile_linear(values: np.ndarray, q: float) -> float:
     else:
         res = lo + diff * gamma
     return float(res)
+
+
+# -------------------------------------------------------------- numba path
+#
+# Everything after the smoothing, fused: one pass over the cell grid
+# (stencils, I_t, |grad I|, vn, Laplacian signs, zero-crossing list), the
+# percentile, then one pass over the candidate rows (strong test, angle,
+# structure tensor at the strong candidates only). Compiled with
+# fastmath=False (no reassociation, no FMA contraction), single-threaded:
+# every element's arithmetic is fixed, so results are bit-identical across
+# runs, buffers and thread counts.
+
+if _njit is not None:
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
+    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand):
+        """One pass over the cell grid: stencils, I_t, |grad I|, vn, zero crossings.
+
+        Writes ``gc, gr, mag, vn`` (cells), fills ``alpha`` with NaN and ``mask``
+        with False, and lists the zero-crossing cells inside the border (flat
+        cell indices, row-major) in ``cand``; returns their number.
+        """
+        H, W = G1.shape
+        h, w = H - 1, W - 1
+        half = np.float32(0.5)
+        quarter = np.float32(0.25)
+        m4 = np.float32(-4.0)
+        nan = np.float32(np.nan)
+        S = np.empty((4, W + 2), np.float32)  # weighted sums, rows y-1..y+2 (ring), edge-padded by 1
+        DC = np.empty((2, W), np.float32)  # column differences of rows r, r+1 (ring)
+        DR = np.empty(W, np.float32)  # row differences between rows r, r+1
+        Dt = np.empty((2, W), np.float32)  # f2 - f0, rows r, r+1 (ring)
+        PS = np.empty((2, W), np.uint8)  # Laplacian > 0, rows r, r+1 (ring)
+        NG = np.empty((2, W), np.uint8)  # Laplacian < 0
+        ZC = np.empty(W, np.uint8)
+        inside = h > 2 * b and w > 2 * b
+        ncand = 0
+        # prime: rows -1, 0, 1 (clamped)
+        for y in range(-1, 2):
+            _comb_row(G0, G1, G2, w0, w1, w2, min(max(y, 0), H - 1), S[(y + 4) % 4])
+        _dcol_row(S[0], kc1, kc2, matched, DC[0], w)
+        _diff_row(G2, G0, 0, Dt[0])
+        _lap_row(G1, 0, m4, PS[0], NG[0])
+        for r in range(h):
+            y2 = r + 2
+            _comb_row(G0, G1, G2, w0, w1, w2, min(y2, H - 1), S[y2 % 4])
+            s_m1 = S[(r + 3) % 4]
+            s_0 = S[r % 4]
+            s_1 = S[(r + 1) % 4]
+            s_2 = S[y2 % 4]
+            d0 = DC[r % 2]
+            d1 = DC[(r + 1) % 2]
+            _dcol_row(s_1, kc1, kc2, matched, d1, w)
+            t0 = Dt[r % 2]
+            t1 = Dt[(r + 1) % 2]
+            _diff_row(G2, G0, r + 1, t1)
+            p0 = PS[r % 2]
+            p1 = PS[(r + 1) % 2]
+            n0 = NG[r % 2]
+            n1 = NG[(r + 1) % 2]
+            _lap_row(G1, r + 1, m4, p1, n1)
+            # row differences between pixel rows r and r + 1 (edge-padded rows)
+            if matched:
+                for x in range(W):
+                    DR[x] = kc1 * (s_1[x + 1] - s_0[x + 1]) + kc2 * (s_2[x + 1] - s_m1[x + 1])
+            else:
+                for x in range(W):
+                    DR[x] = s_1[x + 1] - s_0[x + 1]
+            gcr = gc[r]
+            grr = gr[r]
+            mr = mag[r]
+            vr = vn[r]
+            ar = alpha[r]
+            kr = mask[r]
+            for c in range(w):
+                a = half * (d0[c] + d1[c])
+                bb = half * (DR[c] + DR[c + 1])
+                t = (quarter * (((t0[c] + t0[c + 1]) + t1[c]) + t1[c + 1])) / tdiv
+                m = np.float32(math.sqrt(a * a + bb * bb))
+                v = -t / m
+                gcr[c] = a
+                grr[c] = bb
+                mr[c] = m
+                vr[c] = nan if m == 0 else v
+                ar[c] = nan
+                kr[c] = False
+            if inside and b <= r < h - b:
+                for c in range(w):
+                    ZC[c] = (p0[c] | p0[c + 1] | p1[c] | p1[c + 1]) & (n0[c] | n0[c + 1] | n1[c] | n1[c + 1])
+                base = r * w
+                for c in range(b, w - b):
+                    cand[ncand] = base + c
+                    ncand += ZC[c]
+        return ncand
+
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
+    def _comb_row(G0, G1, G2, w0, w1, w2, y, out):
+        W = G1.shape[1]
+        a0 = G0[y]
+        a1 = G1[y]
+        a2 = G2[y]
+        for x in range(W):
+            out[x + 1] = (w0 * a0[x] + w1 * a1[x]) + w2 * a2[x]
+        out[0] = out[1]
+        out[W + 1] = out[W]
+
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
+    def _dcol_row(s, kc1, kc2, matched, out, w):
+        if matched:
+            for c in range(w):
+                out[c] = kc1 * (s[c + 2] - s[c + 1]) + kc2 * (s[c + 3] - s[c])
+        else:
+            for c in range(w):
+                out[c] = s[c + 2] - s[c + 1]
+
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
+    def _diff_row(A, B, y, out):
+        a = A[y]
+        bb = B[y]
+        for x in range(a.size):
+            out[x] = a[x] - bb[x]
+
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
+    def _lap_row(G, y, m4, pos, neg):
+        """Signs of cv2.Laplacian(ksize=1, BORDER_REFLECT) of row y, same summation order (bit-identical)."""
+        H, W = G.shape
+        up = G[y - 1 if y > 0 else 0]
+        dn = G[y + 1 if y < H - 1 else H - 1]
+        row = G[y]
+        if W == 1:
+            v = ((up[0] + row[0]) + m4 * row[0] + row[0]) + dn[0]
+            pos[0] = v > 0
+            neg[0] = v < 0
+            return
+        v = (((up[0] + row[0]) + m4 * row[0]) + row[1]) + dn[0]
+        pos[0] = v > 0
+        neg[0] = v < 0
+        for x in range(1, W - 1):
+            v = (((up[x] + row[x - 1]) + m4 * row[x]) + row[x + 1]) + dn[x]
+            pos[x] = v > 0
+            neg[x] = v < 0
+        x = W - 1
+        v = (((up[x] + row[x - 1]) + m4 * row[x]) + row[x]) + dn[x]
+        pos[x] = v > 0
+        neg[x] = v < 0
+
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
+    def _nb_select(gc, gr, mag, cand, ncand, thr, tg, rmap, cmap, max_ratio, alpha, mask):
+        """Strong test, angle and corner test at the zero-crossing cells ``cand[:ncand]``.
+
+        The structure tensor (products smoothed with the separable window ``tg``,
+        reflected border via the index maps ``rmap``/``cmap``) is evaluated at
+        the strong candidates only: vertical sums for rows that hold one, then
+        the horizontal sum at each candidate. Returns the number of edge points.
+        """
+        h, w = gc.shape
+        K = tg.size
+        R = (K - 1) // 2
+        # products of the padded rows, ring of K
+        P = np.empty((K, 3, w), np.float32)
+        V = np.empty((3, w + 2 * R), np.float32)
+        J = np.empty((3, w), np.float32)
+        have = -1  # highest padded row whose products are in the ring
+        i = 0
+        count = 0
+        while i < ncand:
+            r = cand[i] // w
+            j = i
+            while j < ncand and cand[j] // w == r:
+                j += 1
+            # strong candidates of row r
+            nstrong = 0
+            for q in range(i, j):
+                c = cand[q] - r * w
+                m = mag[r, c]
+                if m >= thr and m > 0:
+                    cand[i + nstrong] = c
+                    nstrong += 1
+            if nstrong:
+                # products of padded rows r .. r + 2R (source rows rmap[.])
+                lo = max(have + 1, r)
+                for p in range(lo, r + 2 * R + 1):
+                    src = rmap[p]
+                    slot = P[p % K]
+                    a = gc[src]
+                    bb = gr[src]
+                    for c in range(w):
+                        slot[0, c] = a[c] * a[c]
+                        slot[1, c] = bb[c] * bb[c]
+                        slot[2, c] = a[c] * bb[c]
+                have = r + 2 * R
+                # vertical sums (symmetric window) into V[:, R:R+w]
+                for ch in range(3):
+                    # (offset views, not offset indices: provably non-negative indices let LLVM vectorise)
+                    out = V[ch]
+                    oc = out[R : R + w]
+                    mid = P[(r + R) % K, ch]
+                    k0 = tg[R]
+                    for c in range(w):
+                        oc[c] = k0 * mid[c]
+                    for k in range(1, R + 1):
+                        top = P[(r + R - k) % K, ch]
+                        bot = P[(r + R + k) % K, ch]
+                        kk = tg[R + k]
+                        for c in range(w):
+                            oc[c] += kk * (top[c] + bot[c])
+                    for c in range(R):
+                        out[c] = out[R + cmap[c]]
+                    for c in range(w + R, w + 2 * R):
+                        out[c] = out[R + cmap[c]]
+                    # horizontal sums (symmetric window), dense over the row: vectorised
+                    acc = J[ch]
+                    for c in range(w):
+                        acc[c] = k0 * oc[c]
+                    for k in range(1, R + 1):
+                        kk = tg[R + k]
+                        left = out[R - k : R - k + w]
+                        right = out[R + k : R + k + w]
+                        for c in range(w):
+                            acc[c] += kk * (left[c] + right[c])
+                for q in range(i, i + nstrong):
+                    c = cand[q]
+                    alpha[r, c] = math.atan2(gr[r, c], gc[r, c])  # float32 atan2, as the reference
+                    jxx = np.float64(J[0, c])
+                    jyy = np.float64(J[1, c])
+                    jxy = np.float64(J[2, c])
+                    hf = 0.5 * (jxx + jyy)
+                    d = 0.25 * (jxx - jyy) ** 2 + jxy * jxy
+                    root = math.sqrt(d if d > 0.0 else 0.0)
+                    lam1 = hf + root
+                    lam2 = hf - root
+                    if lam2 < 0.0:
+                        lam2 = 0.0
+                    if lam1 > 0 and lam2 / lam1 <= max_ratio:
+                        mask[r, c] = True
+                        count += 1
+            i = j
+        return count
+
+
+def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
+    """Normal flow and edge points from three smoothed frames (numba path)."""
+    p = k.p
+    h, w = ws.shape[0] - 1, ws.shape[1] - 1
+    vn, alpha, mag, mask = ws.outputs()
+    w0, w1, w2 = k.nb_weights
+    ncand = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand)
+    if p.min_gradient is None:
+        high = _percentile_linear(mag, 99.0) if mag.size else 0.0
+        min_gradient = p.relative_gradient * high
+    else:
+        min_gradient = p.min_gradient
+    if ncand:
+        rmap, cmap = k.border_maps(h, w)
+        # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
+        _nb_select(ws.gc, ws.gr, mag, ws.cand, ncand, np.float32(min_gradient), k.tg, rmap, cmap, float(p.max_corner_ratio), alpha, mask)
+    return NormalFlowEdges(vn, alpha, mag, mask, float(min_gradient))
 
 
 # --------------------------------------------------------------- the core
@@ -480,6 +810,13 @@ def normal_flow_edges(
     f0, f1, f2 = as_frames("frames", frames, 3, dtype=np.float32)
     k = _kernels(p)
     ws = _workspace(f0.shape)
+    if isinstance(ws, _NbWorkspace):
+        if not k.smooth:
+            return _nb_run(ws, k, f0, f1, f2)
+        G = ws.G
+        for src, dst in zip((f0, f1, f2), G):
+            _blur(src, dst, k)
+        return _nb_run(ws, k, G[0], G[1], G[2])
     w0, w1, w2 = k.weights
     # Weighted sum and difference; then three smoothing passes.
     cv2.addWeighted(f0, w0, f2, w2, 0.0, dst=ws.A)
@@ -548,13 +885,23 @@ class StreamingNormalFlow:
         img = as_image(f"frame {self._count}", frame, np.float32)
         if self._shape is None:
             self._shape = img.shape
-            self._ws = _Workspace(img.shape)
+            self._numba = USE_NUMBA
+            self._ws = _NbWorkspace(img.shape) if self._numba else _Workspace(img.shape)
         elif img.shape != self._shape:
             msg = f"frame {self._count} has shape {img.shape}, but this stream's frames have shape {self._shape}"
             raise ValueError(msg)
         k = self._k
         if len(self._ring) == 3:
             self._spare.append(self._ring.popleft())
+        if self._numba:
+            # ring of smoothed frames only: one blur per frame plus the fused per-triple work
+            G = self._spare.pop() if self._spare else np.empty(self._shape, np.float32)
+            _blur(img, G, k)
+            self._ring.append(G)
+            self._count += 1
+            if len(self._ring) < 3:
+                return None
+            return _nb_run(self._ws, k, *self._ring)
         if self._spare:
             G, B = self._spare.pop()
         else:
