@@ -246,8 +246,10 @@ def _decode_tiff(path: Path) -> np.ndarray:
 def _decode_npy(path: Path) -> np.ndarray:
     try:
         return np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as exc:
-        raise _read_error(path, f"not a readable NPY file ({exc})") from None
+    except MemoryError:
+        raise _read_error(path, "its NPY header asks for more memory than is available (broken header?)") from None
+    except Exception as exc:  # a broken header raises ValueError, EOFError, tokenize errors, ...
+        raise _read_error(path, f"not a readable NPY file ({type(exc).__name__}: {exc})") from None
 
 
 def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
@@ -309,10 +311,11 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
         arr = arr.astype(np.uint8)
     if arr.ndim == 3 and arr.shape[-1] == 1:
         arr = arr[..., 0]
-    if grey and arr.ndim == 3:
-        arr = to_grey(arr, dtype=out_dtype)
-    if out_dtype is not None:
-        arr = arr.astype(out_dtype, copy=False)
+    with np.errstate(over="ignore"):  # float64 beyond float32 becomes inf; as_image reports it
+        if grey and arr.ndim == 3:
+            arr = to_grey(arr, dtype=out_dtype)
+        if out_dtype is not None:
+            arr = arr.astype(out_dtype, copy=False)
     return arr
 
 

@@ -50,6 +50,23 @@ measurement in a coarse-to-fine warping scheme:
    foreground fattening of the coarse levels and fills weakly textured
    areas from textured neighbours; ``polish_iterations`` differential updates
    (guided, radius 2) restore sub-pixel precision.
+3c. At the finest level (``cost_volume``, default) the dense field is
+   replaced by the minimum of an aggregated matching-cost volume over
+   constant disparities (``cost_step_px`` apart, over the 0.5-99.5 % range
+   of the coarse-to-fine field +-2 px): per view the truncated absolute
+   difference of intensity and column gradient, averaged over the views on
+   each side of the reference, aggregated by a guided filter of radius
+   ``cost_radius`` (cost-volume filtering, Hosni et al. 2011), better side
+   wins; an equiangular sub-sample fit; a 3 x 3 median. Pixels whose best
+   cost is not at least ``min_cost_margin`` (relative) below the best cost
+   more than 1 px away are ``UNCERTAIN`` (ambiguous: textureless or
+   repetitive), as are edge points below ``edge_cost_margin``. The dense
+   uncertainty is the normal-flow information summed over the same window.
+   Measured on Middlebury 2005 this beats the differential dense field
+   (dense bad-1px 2-4 % against 8-16 %) and the propagation / polish below,
+   which are therefore off by default (``propagate_rounds=0``,
+   ``polish_iterations=0``): the differential polish adds a 0.5-1 px ripple
+   on real data.
 4. At the finest level the strong zero-crossing, non-corner edge points
    (:func:`nfdepth.edges.select_edge_points`, the paper's sparse output) are
    refined with their *own* point-wise estimate (paper eq. 6 per point):
@@ -82,6 +99,7 @@ corrected for the spatial correlation of the smoothed noise.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import cv2
@@ -332,6 +350,90 @@ def _propagate(smoothed, t, ref, d, guide, *, rounds, radius, eps):
     return d
 
 
+class _GuidedAggregator:
+    """Guided filter (He et al. 2010) with the guide statistics computed once."""
+
+    def __init__(self, guide, radius, eps):
+        self.g = guide.astype(np.float32)
+        self.r = int(radius)
+        self.mi = _box(self.g, self.r)
+        vi = _box(self.g * self.g, self.r) - self.mi * self.mi
+        self.inv = (1.0 / (np.maximum(vi, 0.0) + np.float32(eps))).astype(np.float32)
+
+    def __call__(self, p):
+        mp = _box(p, self.r)
+        a = (_box(self.g * p, self.r) - self.mi * mp) * self.inv
+        b = mp - a * self.mi
+        return (_box(a, self.r) * self.g + _box(b, self.r)).astype(np.float32)
+
+
+def _match_features(smoothed):
+    """Intensity and column gradient of every view, for the truncated matching cost."""
+    return [(s, cv2.Sobel(s, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)) for s in smoothed]
+
+
+def _shift_cols(img, s):
+    """``out(r, c) = img(r, c - s)`` (linear interpolation, border replicated)."""
+    h, w = img.shape
+    m = np.array([[1.0, 0.0, -float(s)], [0.0, 1.0, 0.0]], np.float64)
+    return cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
+    """Aggregated one-sided matching cost of every constant disparity in ``candidates``.
+
+    Per view the cost is ``(1 - alpha) min(|I_k - I_ref|, tau_i) + alpha
+    min(|G_k - G_ref|, tau_g)`` (intensity and column gradient, truncated;
+    cost-volume filtering after Hosni et al. 2011), averaged over the views on
+    one side of the reference, aggregated by the guided filter ``agg``; the
+    better side wins (Kang & Szeliski 2001).
+    """
+    i_ref, g_ref = feats[ref]
+    h, w = i_ref.shape
+    cols = np.arange(w, dtype=np.float32)[None, :]
+    sides = [[k for k in range(len(t)) if k != ref and np.sign(t[k]) == sgn] for sgn in (-1, 1)]
+    sides = [ks for ks in sides if ks]
+    vol = np.empty((len(candidates), h, w), np.float32)
+    for j, dj in enumerate(candidates):
+        best = None
+        for ks in sides:
+            acc = np.zeros((h, w), np.float32)
+            cnt = np.zeros((1, w), np.float32)
+            for k in ks:
+                s = float(t[k]) * float(dj)
+                ins = ((cols - s) >= 0) & ((cols - s) <= w - 1)
+                ci = np.minimum(np.abs(_shift_cols(feats[k][0], s) - i_ref), tau_i)
+                cg = np.minimum(np.abs(_shift_cols(feats[k][1], s) - g_ref), tau_g)
+                acc += np.where(ins, (1.0 - alpha) * ci + alpha * cg, 0.0)
+                cnt += ins
+            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
+            a = agg(mean)
+            a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf)
+            best = a if best is None else np.minimum(best, a)
+        vol[j] = best
+    return vol
+
+
+def _wta_subpixel(vol, candidates):
+    """Winner-take-all over the cost volume with a sub-sample (equiangular) fit over its neighbours."""
+    idx = np.argmin(vol, axis=0)
+    n = len(candidates)
+    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
+    c0 = np.take_along_axis(vol, idx[None], 0)[0]
+    cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
+    cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        curv = cm - 2.0 * c0 + cp
+        # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
+        # about its minimum, and a parabola would pull toward the samples
+        # (Shimizu & Okutomi 2005)
+        slope = np.maximum(cm, cp) - c0
+        off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
+    off = np.clip(np.nan_to_num(off), -0.5, 0.5)
+    d = np.asarray(candidates, np.float32)[idx] + off * step
+    return d.astype(np.float32), c0, curv
+
+
 def _nodes_from_pixels(d: np.ndarray) -> np.ndarray:
     """Values at the half-shifted nodes ``(r - 1/2, c - 1/2)``: mean of the 4 pixels around."""
     p = np.pad(d, 1, mode="edge")
@@ -573,11 +675,23 @@ def static_stereo(
     aggregation: str = "guided",
     guided_eps: float = 0.01,
     guided_scale: float = 1.5,
-    propagate_rounds: int = 2,
+    propagate_rounds: int = 0,
     propagate_levels: int = 1,
     propagate_radius: int = 4,
-    polish_iterations: int = 1,
+    polish_iterations: int = 0,
+    polish_radius: int = 2,
     max_edge_disagreement_px: float = 0.5,
+    cost_volume: bool = True,
+    cost_step_px: float = 0.5,
+    cost_radius: int = 9,
+    cost_eps: float = 1e-4,
+    cost_tau_i: float = 0.03,
+    cost_tau_g: float = 0.01,
+    cost_alpha: float = 0.9,
+    cost_sigma_px: float = 0.0,
+    cost_median_px: int = 3,
+    min_cost_margin: float = 0.05,
+    edge_cost_margin: float = 0.1,
     dtype=np.float32,
 ) -> StereoResult:
     """Dense multi-view disparity from relative normal flow, coarse to fine.
@@ -662,7 +776,27 @@ def static_stereo(
         Differential updates after each propagation.
     max_edge_disagreement_px : float
         Edge points whose point-wise estimate differs from the dense field by
-        more than this are ``UNCERTAIN``.
+        more than this are ``UNCERTAIN``. With ``edges_only=False`` a rejected
+        edge point keeps the dense value and leaves ``edge_mask`` (which then
+        marks the edge points that carry their own estimate).
+    cost_volume : bool
+        Dense field from the aggregated matching-cost volume at the finest
+        level (module docstring, step 3c).
+    cost_step_px, cost_radius, cost_eps : float, int, float
+        Candidate spacing (px per unit position), guided-filter box radius and
+        ridge of the cost aggregation.
+    cost_tau_i, cost_tau_g, cost_alpha : float
+        Truncation of the intensity and gradient differences (fractions of the
+        reference's 1-99 % intensity range) and the weight of the gradient term.
+    cost_sigma_px : float
+        Gaussian smoothing of the views before matching (0: none).
+    cost_median_px : int
+        Median filter size after the cost volume's minimum (0 or 1: none).
+    min_cost_margin, edge_cost_margin : float
+        Relative cost margin to the best candidate more than 1 px away below
+        which dense pixels / edge points are ``UNCERTAIN`` (0: no test).
+    polish_radius : int
+        Guided-filter radius of the differential polish.
     dtype : float32
         Working precision (float32; float64 is accepted and converted).
 
@@ -768,24 +902,67 @@ def static_stereo(
             var = np.where(ok, v_new, var).astype(np.float32)
         if median_px > 1:
             d = cv2.medianBlur(d, median_px)
-        if propagate_rounds and level <= propagate_levels - 1:
+        if cost_volume and level == 0:
+            lo = np.floor(np.percentile(d, 0.5)) - 2.0
+            hi = np.ceil(np.percentile(d, 99.5)) + 2.0
+            step = float(cost_step_px)
+            if (hi - lo) / step > 512:
+                step = (hi - lo) / 512
+            candidates = np.arange(lo, hi + 0.5 * step, step, dtype=np.float64)
+            src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
+            feats = _match_features(src)
+            agg = _GuidedAggregator(guide[0], cost_radius, cost_eps)
+            vol = _cost_volume(feats, t, ref, candidates, agg, tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha)
+            d, c_best, _ = _wta_subpixel(vol, candidates)
+            # uniqueness: the best cost against the best one more than 1 px away
+            near = np.abs(np.asarray(candidates, np.float32)[:, None, None] - d[None]) <= 1.0
+            c_second = np.min(np.where(near, np.inf, vol), axis=0)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                margin = (c_second - c_best) / np.maximum(c_best, 1e-6 * spread)
+            del vol, near
+            if cost_median_px > 1:
+                d = cv2.medianBlur(d, cost_median_px)
+        propagate = bool(propagate_rounds) and level <= propagate_levels - 1
+        if propagate:
             d = _propagate(smoothed, t, ref, d, guide[level], rounds=int(propagate_rounds), radius=propagate_radius, eps=guided_eps * 0.1)
+        if propagate or (cost_volume and level == 0):
+            # differential polish (sub-pixel), kept within half a candidate step of the discrete field
+            d_discrete = d
+            reach = 0.5 * step if (cost_volume and level == 0) else 0.5 * int(polish_iterations)
             for _ in range(int(polish_iterations)):
                 m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
                 info = m.grad_col**2 * m.s_tt
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, 2, guided_eps)
+                    delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, polish_radius, guided_eps)
                 delta = np.where(np.isfinite(delta), np.clip(delta, -0.5, 0.5), 0.0).astype(np.float32)
-                d = d + delta
+                d = np.clip(d + delta, d_discrete - reach, d_discrete + reach).astype(np.float32)
     # final measurement at the finest level for validity, edges and uncertainty
     m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
     field = GradientField(m.grad_col, m.grad_row, m.slope)
     selection = select_edge_points(field, m.ref_nodes, min_gradient=min_gradient, max_corner_ratio=max_corner_ratio, corner_window_px=max(sigma_px, 1.0))
     edge_mask = selection.mask
+    if not edge_mask.any():
+        warnings.warn(
+            "no edge points: the images are textureless (no strong zero-crossing edges); no depth can be measured",
+            UserWarning,
+            stacklevel=2,
+        )
     h, w = d.shape
     reason = np.full((h, w), Reason.OK, np.uint8)
+    if cost_volume:
+        # the dense field now rests on the cost aggregation window: its information
+        info = m.grad_col**2 * m.s_tt
+        box_n = float((2 * cost_radius + 1) ** 2)
+        dof = np.maximum(m.dof, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            red = _box(m.chi2, cost_radius) / (_box(dof, cost_radius) * s_c**2)
+            red = np.where(np.isfinite(red), np.maximum(red, 1.0), 1.0)
+            var = np.where(info.max() > 0, s_c**2 * red * corr_area / (box_n * _box(info, cost_radius)), np.inf).astype(np.float32)
+        var[~np.isfinite(var)] = np.inf
     std = np.sqrt(var).astype(np.float32)
     reason[~np.isfinite(std)] = Reason.UNDETERMINABLE
+    if cost_volume and min_cost_margin > 0:
+        reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
 
@@ -811,6 +988,17 @@ def static_stereo(
         # consistency with the dense (propagated) field: a point-wise estimate that
         # left its neighbourhood's disparity straddles a depth step or an occlusion
         r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d[er, ec]) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
+        if cost_volume and edge_cost_margin > 0:
+            r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
+        if edges_only:
+            keep = np.ones(er.size, bool)
+        else:
+            # dense output: a rejected edge point falls back to the dense field
+            # and is no edge point (it carries no point-wise estimate of its own)
+            keep = r_e == Reason.OK
+            edge_mask = edge_mask.copy()
+            edge_mask[er[~keep], ec[~keep]] = False
+        er, ec, d_e, std_e, r_e = er[keep], ec[keep], d_e[keep], std_e[keep], r_e[keep]
         disparity[er, ec] = d_e
         std[er, ec] = std_e
         reason[er, ec] = r_e
