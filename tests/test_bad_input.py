@@ -67,7 +67,7 @@ BAD_LIBRARY_CALLS = [
     ("width 0", _call(nf.PinholeCamera, 1.0, 0, 32), ValueError, "width_px must be a positive integer, got 0"),
     ("width float", _call(nf.PinholeCamera, 1.0, 2.5, 32), ValueError, "width_px must be a positive integer, got 2.5"),
     ("width bool", _call(nf.PinholeCamera, 1.0, True, 32), ValueError, "width_px must be a positive integer, got True"),
-    ("cx nan", _call(nf.PinholeCamera, 1.0, 4, 4, cx_px=float("nan")), ValueError, "cx_px must be finite, got nan"),
+    ("cx nan", _call(nf.PinholeCamera, 1.0, 4, 4, cx_px=float("nan")), ValueError, "cx_px must be a finite number (pixels), got nan"),
     ("cy str", _call(nf.PinholeCamera, 1.0, 4, 4, cy_px="c"), TypeError, "cy_px must be a finite number (pixels), got 'c'"),
     # motion
     ("motion len 2", _call(nf.RigidMotion, (1.0, 2.0)), ValueError, "translation must have shape (3,), got shape (2,)"),

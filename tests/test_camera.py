@@ -103,7 +103,7 @@ def test_coefficients_reproduce_normal_flow(camera):
         ({"focal_px": -5, "width_px": 10, "height_px": 10}, "focal_px must be a positive"),
         ({"focal_px": float("nan"), "width_px": 10, "height_px": 10}, "focal_px must be a positive"),
         ({"focal_px": 100, "width_px": 0, "height_px": 10}, "width_px must be a positive integer"),
-        ({"focal_px": 100, "width_px": 10, "height_px": 10, "cx_px": float("inf")}, "cx_px must be finite"),
+        ({"focal_px": 100, "width_px": 10, "height_px": 10, "cx_px": float("inf")}, "cx_px must be a finite number"),
     ],
 )
 def test_bad_camera(kwargs, match):

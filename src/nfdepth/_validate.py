@@ -66,6 +66,20 @@ def check_frame_size(name: str, shape) -> None:
         raise ImageTooLargeError(msg)
 
 
+def check_finite(name: str, value, *, unit: str = "") -> float:
+    """Return ``value`` as float, or raise if it is not a finite number."""
+    what = f"a finite number{f' ({unit})' if unit else ''}"
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be {what}, got {value!r}"
+        raise TypeError(msg) from None
+    if not np.isfinite(number):
+        msg = f"{name} must be {what}, got {value!r}"
+        raise ValueError(msg)
+    return number
+
+
 def check_positive_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number > 0."""
     try:

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import as_vector3, check_positive_finite
+from ._validate import as_vector3, check_finite, check_positive_finite
 
 __all__ = [
     "PinholeCamera",
@@ -61,15 +61,7 @@ class PinholeCamera:
         if self.cy_px is None:
             object.__setattr__(self, "cy_px", (self.height_px - 1) / 2.0)
         for name in ("cx_px", "cy_px"):
-            value = getattr(self, name)
-            try:
-                number = float(value)
-            except (TypeError, ValueError):
-                msg = f"{name} must be a finite number (pixels), got {value!r}"
-                raise TypeError(msg) from None
-            if not np.isfinite(number):
-                msg = f"{name} must be finite, got {value!r}"
-                raise ValueError(msg)
+            check_finite(name, getattr(self, name), unit="pixels")
 
     @property
     def shape(self) -> tuple[int, int]:

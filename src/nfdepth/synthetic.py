@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_vector3, check_frame_size, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_vector3, check_finite, check_frame_size, check_nonnegative_finite, check_positive_finite, float_dtype
 from .camera import PinholeCamera, RigidMotion
 
 __all__ = [
@@ -88,15 +88,7 @@ PYRAMID_FACE_INTENSITIES = {
 
 
 def _check_time(name: str, value) -> float:
-    try:
-        t = float(value)
-    except (TypeError, ValueError):
-        msg = f"{name} must be a finite number, got {value!r}"
-        raise TypeError(msg) from None
-    if not np.isfinite(t):
-        msg = f"{name} must be a finite number, got {value!r}"
-        raise ValueError(msg)
-    return t
+    return check_finite(name, value)
 
 
 def _check_noise(noise_std, rng) -> float:
