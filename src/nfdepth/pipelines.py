@@ -199,6 +199,12 @@ def _check_min_size(name: str, shape) -> None:
         raise ValueError(msg)
 
 
+def _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px) -> dict:
+    """Options of :func:`select_edge_points`; the corner window defaults to 2 sigma."""
+    window = corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0)
+    return {"min_gradient": min_gradient, "max_corner_ratio": max_corner_ratio, "corner_window_px": window}
+
+
 def _check_camera(camera, shape):
     if not isinstance(camera, PinholeCamera):
         msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
@@ -289,11 +295,7 @@ def dynamic_stereo(
         0.5 * (moving.grad_row + stationary.grad_row),
         moving.grad_t - stationary.grad_t,
     )
-    edge_options = {
-        "min_gradient": min_gradient,
-        "max_corner_ratio": max_corner_ratio,
-        "corner_window_px": corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0),
-    }
+    edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
     return _edge_result(
         camera=camera,
         relative_motion=relative_motion,
@@ -402,11 +404,7 @@ def static_stereo_edges(
         fused, fused_std, _ = fuse_inverse_depth(np.stack(flows), 0.0, ones, np.stack(stds) if noise > 0 else ones)
         delta = fused
         std = fused_std * (noise > 0) if noise > 0 else np.full_like(fused, 0.0)
-    edge_options = {
-        "min_gradient": min_gradient,
-        "max_corner_ratio": max_corner_ratio,
-        "corner_window_px": corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0),
-    }
+    edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
     return _edge_result(
         camera=camera,
         relative_motion=relative_motion,
