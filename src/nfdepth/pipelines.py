@@ -400,10 +400,10 @@ def static_stereo_edges(
     else:
         # All triples measure the same flow per unit step; combine them with
         # inverse-variance weights (B is common, so this is the WLS of eq. 4).
+        # Without image noise (std 0) every triple gets the same weight.
         ones = np.ones_like(flows[0])
-        fused, fused_std, _ = fuse_inverse_depth(np.stack(flows), 0.0, ones, np.stack(stds) if noise > 0 else ones)
-        delta = fused
-        std = fused_std * (noise > 0) if noise > 0 else np.full_like(fused, 0.0)
+        delta, fused_std, _ = fuse_inverse_depth(np.stack(flows), 0.0, ones, np.stack(stds) if noise > 0 else ones)
+        std = fused_std if noise > 0 else np.zeros_like(delta)
     edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
     return _edge_result(
         camera=camera,
