@@ -88,7 +88,7 @@ def test_rotation_degrees_converted_to_radians():
     np.testing.assert_allclose(m.rotation, [0.0, 0.0, -np.deg2rad(0.5)])
 
 
-@pytest.mark.parametrize("path", [PAPER_RIG, RAIL_RIG])
+@pytest.mark.parametrize("path", [PAPER_RIG, RAIL_RIG, EXAMPLES / "passing_cameras_rig.toml"])
 def test_round_trip_examples(path):
     rig = load_rig(path)
     again = rig_from_dict(tomllib.loads(rig_to_toml(rig)))
@@ -108,6 +108,15 @@ def test_round_trip_all_sections(tmp_path):
     d["video"] = {"poses": "p.csv"}
     rig = rig_from_dict(d, base_dir=tmp_path)
     assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+
+
+def test_crossings_round_trip():
+    d = copy.deepcopy(BASE)
+    d["motion"]["crossings"] = [4, 12.0]
+    rig = rig_from_dict(d)
+    assert rig.motion.crossings == (4, 12)
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+    assert load_rig(PAPER_RIG).motion.crossings is None
 
 
 def test_poses_relative_to_rig_folder(tmp_path):
@@ -150,6 +159,11 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["video"].pop("velocity"), r"video: expected one of velocity, positions, poses"),
         (lambda d: d["video"].update(velocity=[0, 0, 0]), r"video\.velocity = \[0, 0, 0\]: expected a non-zero camera translation"),
         (lambda d: d["video"].pop("velocity") and d["video"].update(positions=[[0, 0]]), r"video\.positions = \[\[0, 0\]\]: expected a list of 3 or more"),
+        (lambda d: d["motion"].update(crossings=[1, 5]), r"motion\.crossings = \[1, 5\]: expected .*frame 1 has no two frames before it"),
+        (lambda d: d["motion"].update(crossings=[5, 5]), r"motion\.crossings = \[5, 5\]: expected .*strictly increasing"),
+        (lambda d: d["motion"].update(crossings=[]), r"motion\.crossings = \[\]: expected a non-empty list"),
+        (lambda d: d["motion"].update(crossings=4), r"motion\.crossings = 4: expected a non-empty list"),
+        (lambda d: d["motion"].update(crossings=[4.5]), r"motion\.crossings = \[4\.5\]: expected a non-empty list of frame indices"),
     ],
 )
 def test_validation_errors(edit, match):
@@ -293,3 +307,15 @@ def test_dynamic_cli_errors(tmp_path, capsys, paper_pngs, rig_text, n_images, co
 def test_dynamic_cli_missing_rig(tmp_path, capsys, paper_pngs):
     code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", tmp_path / "nope.toml", "--out", tmp_path / "z.tif")
     assert code == 3 and "nope.toml" in err and err.count("\n") == 1
+
+
+def test_dynamic_cli_figure(tmp_path, capsys, paper_pngs):
+    out, unc, fig = tmp_path / "z.tif", tmp_path / "s.tif", tmp_path / "fig.png"
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", out, "--figure", fig)
+    assert code == 0, err
+    assert fig.read_bytes()[:4] == b"\x89PNG" and not (tmp_path / "fig_std.png").exists()  # no --uncertainty: no std figure
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", out, "--uncertainty", unc, "--figure", fig, "--force")
+    assert code == 0, err
+    assert (tmp_path / "fig_std.png").read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", tmp_path / "y.tif", "--figure", tmp_path / "z.tif")
+    assert code == 2 and "--figure" in err and ".png" in err

@@ -20,12 +20,39 @@ Pipelines (sections 2.3, 3.2, 3.3)
 Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
     static_stereo, StereoResult
 Files
-    read_image, write_array, read_pfm, write_pfm, write_ply, depth_to_points
+    read_image, write_array, write_colormap_png, read_pfm, write_pfm,
+    write_ply, depth_to_points
 
-Sub-modules not imported here: ``synthetic`` (scenes), ``experiments`` (the
-paper's experiments), ``datasets`` (real data sets), ``plot`` (figures),
-``fast`` (fused fast path, streaming), ``bench`` (benchmarks).
+Behind the ``nfdepth`` commands (each command is a thin layer over these;
+imported on first use, so ``import nfdepth`` stays light):
+
+==========================  ================================================
+command                     functions
+==========================  ================================================
+``nfdepth stereo``          static_stereo; with ``--rig``: load_rig,
+                            stereo_options_from_rig
+``nfdepth dynamic I1..I5``  load_rig, dynamic_stereo_from_rig, edge_depth_maps
+``nfdepth dynamic``         load_rig, read_video, dynamic_stereo_from_videos
+``--moving-video M``        (:class:`CrossingDepth`), interleaved_frames,
+``--reference-video R``     write_crossings_npz
+``nfdepth video``           load_rig, read_video, depth_from_video
+                            (:class:`VideoDepthFrame`), write_video_npz
+``nfdepth evaluate``        evaluate_scene, evaluate_dataset,
+                            disparity_errors; the peers sgbm_disparity,
+                            waxman_sinha_disparity
+``nfdepth reproduce``,      run_paper_experiment
+``nfdepth demo``
+==========================  ================================================
+
+Rig files: Rig, RigError, load_rig (``docs/rig-format.md``).
+
+Sub-modules with more: ``rig``, ``video``, ``evaluate``, ``baselines``,
+``experiments``, ``synthetic`` (scenes), ``datasets`` (real data sets),
+``plot`` (figures), ``fast`` (fused fast path, streaming), ``bench``
+(benchmarks).
 """
+
+from typing import TYPE_CHECKING
 
 from .camera import (
     PinholeCamera,
@@ -46,11 +73,67 @@ from .depth import (
 )
 from .edges import EdgeSelection, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, normal_flow
-from .io import depth_to_points, read_image, read_pfm, write_array, write_pfm, write_ply
+from .io import depth_to_points, read_image, read_pfm, write_array, write_colormap_png, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
 from .stereo import StereoResult, static_stereo
 
 __version__ = "0.1.0"
+
+#: Public names re-exported lazily (PEP 562): name -> sub-module.
+_LAZY = {
+    "Rig": "rig",
+    "RigError": "rig",
+    "load_rig": "rig",
+    "stereo_options_from_rig": "rig",
+    "dynamic_stereo_from_rig": "rig",
+    "edge_depth_maps": "rig",
+    "read_video": "video",
+    "depth_from_video": "video",
+    "VideoDepthFrame": "video",
+    "write_video_npz": "video",
+    "dynamic_stereo_from_videos": "video",
+    "interleaved_frames": "video",
+    "CrossingDepth": "video",
+    "write_crossings_npz": "video",
+    "evaluate_scene": "evaluate",
+    "evaluate_dataset": "evaluate",
+    "disparity_errors": "evaluate",
+    "sgbm_disparity": "baselines",
+    "waxman_sinha_disparity": "baselines",
+    "run_paper_experiment": "experiments",
+}
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    from .baselines import sgbm_disparity, waxman_sinha_disparity
+    from .evaluate import disparity_errors, evaluate_dataset, evaluate_scene
+    from .experiments import run_paper_experiment
+    from .rig import Rig, RigError, dynamic_stereo_from_rig, edge_depth_maps, load_rig, stereo_options_from_rig
+    from .video import (
+        CrossingDepth,
+        VideoDepthFrame,
+        depth_from_video,
+        dynamic_stereo_from_videos,
+        interleaved_frames,
+        read_video,
+        write_crossings_npz,
+        write_video_npz,
+    )
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'nfdepth' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "PinholeCamera",
@@ -80,9 +163,11 @@ __all__ = [
     "StereoResult",
     "read_image",
     "write_array",
+    "write_colormap_png",
     "read_pfm",
     "write_pfm",
     "write_ply",
     "depth_to_points",
+    *_LAZY,
     "__version__",
 ]

@@ -2,11 +2,19 @@
 
 Each command is a thin layer over public functions:
 
-* ``dynamic`` -> :func:`nfdepth.rig.load_rig`, :func:`nfdepth.io.read_image`,
+* ``dynamic I1 .. I5`` -> :func:`nfdepth.rig.load_rig`, :func:`nfdepth.io.read_image`,
   :func:`nfdepth.rig.dynamic_stereo_from_rig`, :func:`nfdepth.rig.edge_depth_maps`.
+* ``dynamic --moving-video M --reference-video R`` -> :func:`nfdepth.rig.load_rig`,
+  :func:`nfdepth.video.read_video`, :func:`nfdepth.video.dynamic_stereo_from_videos`,
+  :func:`nfdepth.video.write_crossings_npz` / :func:`nfdepth.video.write_video_frame`.
 * ``video`` -> :func:`nfdepth.rig.load_rig`, :func:`nfdepth.video.read_video`,
   :func:`nfdepth.video.depth_from_video`, :func:`nfdepth.video.write_video_npz`
   / :func:`nfdepth.video.write_video_frame`.
+
+``--figure PNG`` (both commands) -> :func:`nfdepth.plot.colormap_panel`,
+:func:`nfdepth.plot.save_figure`: the depth map with a colour bar, and the
+depth standard deviation next to it as ``PNG`` with ``_std`` before the
+extension, whenever the command writes a standard deviation.
 """
 
 from __future__ import annotations
@@ -24,8 +32,58 @@ __all__ = ["register"]
 _CLIError = Exception  # replaced by register()
 
 
+def figure_std_path(path) -> Path:
+    """Where ``--figure PNG`` puts the standard-deviation figure: ``PNG`` with ``_std`` before ``.png``."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}_std{path.suffix}")
+
+
+def figure_outputs(args, *, with_std: bool) -> dict:
+    """Validate ``--figure`` (and, ``with_std``, its ``_std`` sibling) before any work.
+
+    Shared by the commands that draw figures (``args.figure``, ``args.force``);
+    returns ``{"figure": Path[, "figure_std": Path]}`` or ``{}``.
+    """
+    from .cli import _check_output
+
+    if not getattr(args, "figure", None):
+        return {}
+    outs = {"figure": _check_output(args.figure, force=args.force, exts=(".png",), what="--figure")}
+    if with_std:
+        outs["figure_std"] = _check_output(str(figure_std_path(args.figure)), force=args.force, exts=(".png",), what="--figure's std figure")
+    return outs
+
+
+def write_figures(outs: dict, values, std, *, title: str, unit: str, quantity: str = "depth") -> list:
+    """Write the figures :func:`figure_outputs` validated: ``values`` (and ``std``) with a colour bar in ``unit``."""
+    from . import plot
+
+    written = []
+    if "figure" in outs:
+        fig = plot.colormap_panel(values, title=f"{quantity}: {title}", unit=f"{quantity} ({unit})")
+        written.append(plot.save_figure(fig, outs["figure"]))
+    if "figure_std" in outs and std is not None:
+        fig = plot.colormap_panel(std, title=f"{quantity} std: {title}", unit=f"{quantity} standard deviation ({unit})")
+        written.append(plot.save_figure(fig, outs["figure_std"]))
+    return written
+
+
+def _distinct(outs: dict, CLIError) -> dict:
+    from .cli import EXIT_USAGE
+
+    if len({str(Path(p).resolve()) for p in outs.values()}) != len(outs):
+        raise CLIError("output paths must differ from each other", EXIT_USAGE)
+    return outs
+
+
+def _check_sigma(args, CLIError) -> dict:
+    if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px < 0):
+        raise CLIError(f"--sigma-px must be a finite number >= 0, got {args.sigma_px:g}")
+    return {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
+
+
 def _outputs(args, CLIError):
-    from .cli import EXIT_USAGE, _check_output
+    from .cli import _check_output
 
     outs = {"out": _check_output(args.out, force=args.force)}
     if args.uncertainty:
@@ -36,9 +94,8 @@ def _outputs(args, CLIError):
         outs["ply"] = _check_output(args.ply, force=args.force, exts=(".ply",), what="--ply")
     if args.csv:
         outs["csv"] = _check_output(args.csv, force=args.force, exts=(".csv",), what="--csv")
-    if len({str(p.resolve()) for p in outs.values()}) != len(outs):
-        raise CLIError("output paths must differ from each other", EXIT_USAGE)
-    return outs
+    outs.update(figure_outputs(args, with_std=bool(args.uncertainty)))
+    return _distinct(outs, CLIError)
 
 
 def _cmd_dynamic(args) -> int:
@@ -46,17 +103,23 @@ def _cmd_dynamic(args) -> int:
     from .rig import dynamic_stereo_from_rig, edge_depth_maps, load_rig
 
     CLIError = _CLIError
+    videos = [v for v in (args.moving_video, args.reference_video) if v is not None]
+    if videos:
+        return _cmd_dynamic_videos(args)
+    if args.crossings is not None or args.shared is not None:
+        raise CLIError("--crossings and --shared go with --moving-video and --reference-video")
     if len(args.images) != 5:
-        raise CLIError(f"dynamic needs exactly 5 images I1 I2 I3 I4 I5 (I1, I3, I5 moving camera; I2, I3, I4 reference), got {len(args.images)}")
-    if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px < 0):
-        raise CLIError(f"--sigma-px must be a finite number >= 0, got {args.sigma_px:g}")
+        raise CLIError(
+            f"dynamic needs exactly 5 images I1 I2 I3 I4 I5 (I1, I3, I5 moving camera; I2, I3, I4 reference)"
+            f" or --moving-video and --reference-video, got {len(args.images)} images"
+        )
+    options = _check_sigma(args, CLIError)
     outs = _outputs(args, CLIError)
     rig = load_rig(args.rig)
     rig.relative_motion()  # a missing [motion] fails before any image is read
     frames = [read_image(p) for p in args.images]
     for k, (p, f) in enumerate(zip(args.images, frames), 1):
         rig.check_image_shape(f.shape, what=f"I{k} '{Path(p).name}'")
-    options = {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
     result = dynamic_stereo_from_rig(frames, rig, **options)
     depth, std = edge_depth_maps(result)
     write_array(outs["out"], depth, force=args.force)
@@ -64,6 +127,7 @@ def _cmd_dynamic(args) -> int:
         write_array(outs["uncertainty"], std, force=args.force)
     if "preview" in outs:
         write_colormap_png(outs["preview"], depth, force=args.force)
+    write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=args.unit)
     ok = result.valid
     if "ply" in outs:
         grey = read_image(args.images[2], grey=False, dtype=None)
@@ -83,6 +147,66 @@ def _cmd_dynamic(args) -> int:
     z = result.depth[ok]
     rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
     print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}), range {rng_txt} -> {outs['out']}")
+    return 0
+
+
+def _cmd_dynamic_videos(args) -> int:
+    """``nfdepth dynamic --moving-video M --reference-video R``: depth at each crossing instant."""
+    from .rig import check_crossings, load_rig
+    from .video import dynamic_stereo_from_videos, read_video, write_crossings_npz, write_video_frame
+
+    CLIError = _CLIError
+    if args.moving_video is None or args.reference_video is None:
+        raise CLIError("two synchronised videos need both --moving-video and --reference-video")
+    if args.images:
+        raise CLIError("give either five images or --moving-video and --reference-video, not both")
+    for flag in ("uncertainty", "preview", "ply", "csv"):
+        if getattr(args, flag):
+            raise CLIError(
+                f"--{flag} is for five images; with two videos --out holds depth and depth_std per crossing (.npz or a folder)"
+            )
+    options = _check_sigma(args, CLIError)
+    kind, out = _video_output(args, CLIError)
+    outs = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
+    crossings = None
+    if args.crossings is not None:
+        try:
+            crossings = check_crossings(args.crossings)
+        except (TypeError, ValueError) as exc:
+            raise CLIError(f"--crossings {' '.join(str(c) for c in args.crossings)}: expected {exc}") from None
+    rig = load_rig(args.rig)
+    rig.relative_motion()  # a missing [motion] fails before any frame is read
+    if crossings is None and rig.motion.crossings is None:
+        raise CLIError(f"rig '{args.rig}' has no motion.crossings: give --crossings K [K ...] (frames at which the cameras coincide)")
+    moving, reference = read_video(args.moving_video), read_video(args.reference_video)
+    if moving.paths is not None and reference.paths is not None and len(moving) != len(reference):
+        raise CLIError(
+            f"the videos must be synchronised frame by frame: '{args.moving_video}' has {len(moving)} frames,"
+            f" '{args.reference_video}' {len(reference)}"
+        )
+    if moving.paths is not None and reference.paths is not None:
+        n = len(moving)
+        late = [c for c in (crossings or rig.motion.crossings) if c + 2 >= n]
+        if late:
+            raise CLIError(f"crossing {late[0]} needs frames {late[0] - 2}..{late[0] + 2}, but the videos have {n} frames (0..{n - 1})")
+    results = []
+    last = None
+    for res in dynamic_stereo_from_videos(moving, reference, rig=rig, crossings=crossings, shared=args.shared or "mean", **options):
+        if kind == "npz":
+            results.append(res)
+        else:
+            out.mkdir(exist_ok=True)
+            write_video_frame(res, out, force=args.force)
+        n = int(res.valid.sum())
+        z = res.depth[res.valid]
+        rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
+        print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}")
+        last = res
+    if kind == "npz":
+        write_crossings_npz(results, out, camera=rig.camera, force=args.force)
+    if last is not None:
+        write_figures(outs, last.depth, last.depth_std, title=f"crossing {last.index}", unit=args.unit)
+    print(f"depth at {len(crossings or rig.motion.crossings)} crossings -> {out}")
     return 0
 
 
@@ -161,8 +285,8 @@ def _cmd_video(args) -> int:
 
     CLIError = _CLIError
     kind, out = _video_output(args, CLIError)
-    if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px < 0):
-        raise CLIError(f"--sigma-px must be a finite number >= 0, got {args.sigma_px:g}")
+    options = _check_sigma(args, CLIError)
+    figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
         rig = dataclasses.replace(rig, video=VideoSpec(poses=load_poses(args.poses)))
@@ -172,7 +296,6 @@ def _cmd_video(args) -> int:
     total = len(source)
     if source.paths is not None and total < 3:
         raise CLIError(f"video needs at least 3 frames, '{args.source}' has {total}")
-    options = {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
     frames_iter = iter(source)
     first = next(frames_iter, None)
     if first is None:
@@ -189,8 +312,10 @@ def _cmd_video(args) -> int:
 
     results = []
     written = 0
+    last = None
     try:
         for res in depth_from_video(counted(), rig=rig, **options):
+            last = res
             if kind == "npz":
                 results.append(res)
             else:
@@ -206,6 +331,8 @@ def _cmd_video(args) -> int:
     if kind == "npz":
         write_video_npz(results, out, camera=rig.camera, force=args.force)
         written = len(results)
+    if last is not None:
+        write_figures(figures, last.depth, last.depth_std, title=f"frame {last.index} (fused)", unit=args.unit)
     print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple) -> {out}")
     return 0
 
@@ -215,12 +342,22 @@ def register(sub, CLIError) -> None:
     global _CLIError
     _CLIError = CLIError
 
-    p = sub.add_parser("dynamic", help="dynamic stereo: depth at edge points from five images and a rig file (paper eq. 4)")
-    p.add_argument("images", nargs="+", metavar="IMAGE", help="I1 I2 I3 I4 I5: I1, I3, I5 from the moving camera, I2, I3, I4 from the reference")
+    p = sub.add_parser(
+        "dynamic",
+        help="dynamic stereo: depth at edge points from five images, or two synchronised videos, and a rig file (paper eq. 4)",
+    )
+    p.add_argument("images", nargs="*", metavar="IMAGE", help="I1 I2 I3 I4 I5: I1, I3, I5 from the moving camera, I2, I3, I4 from the reference")
+    p.add_argument("--moving-video", metavar="VIDEO", help="instead of images: the moving camera's video (file, image folder or glob)")
+    p.add_argument("--reference-video", metavar="VIDEO", help="the reference camera's video, frame k taken with frame k of --moving-video")
+    p.add_argument("--crossings", type=int, nargs="+", metavar="K", help="with videos: frames at which the two cameras coincide (default: the rig's motion.crossings)")
+    p.add_argument("--shared", choices=("mean", "reference", "moving"), help="with videos: I3 from M[K] and R[K]: their mean (default) or one of them")
     p.add_argument("--rig", required=True, metavar="TOML", help="rig file with [camera] and [motion] (docs/rig-format.md)")
-    p.add_argument("--out", required=True, metavar="FILE", help="depth at the edge points of I3: .pfm, .tif or .npy, NaN elsewhere")
+    p.add_argument("--out", required=True, metavar="OUT", help="depth at the edge points of I3: .pfm, .tif or .npy, NaN elsewhere;"
+                   " with videos OUT.npz or a folder (depth_NNNNNN.tif, depth_std_NNNNNN.tif per crossing)")
     p.add_argument("--uncertainty", metavar="FILE", help="also write the depth standard deviation here")
-    p.add_argument("--preview", metavar="PNG", help="also write a colour-mapped PNG")
+    p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG")
+    p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (and, with the std, PNG_std.png); videos: the last crossing")
+    p.add_argument("--unit", default="scene units", help="unit of depth for the colour bar (default: scene units)")
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")
     p.add_argument("--csv", metavar="FILE", help="also write the points as CSV: row,col,depth,depth_std (sub-pixel positions)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 3)")
@@ -232,6 +369,8 @@ def register(sub, CLIError) -> None:
     p.add_argument("--rig", required=True, metavar="TOML", help="rig file with [camera] and [video] (docs/rig-format.md)")
     p.add_argument("--out", required=True, metavar="OUT", help="OUT.npz (all frames, written at the end) or a folder (depth_NNNNNN.tif per frame)")
     p.add_argument("--poses", metavar="CSV", help="camera poses per frame (frame,x,y,z[,rx,ry,rz]); replaces the rig's [video]")
+    p.add_argument("--figure", metavar="PNG", help="also write figures with a colour bar of the last frame's fused depth (PNG) and std (PNG_std.png)")
+    p.add_argument("--unit", default="scene units", help="unit of depth for the colour bar (default: scene units)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 2)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")

@@ -330,7 +330,11 @@ def _cmd_stereo(args) -> int:
         outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview"))
     if args.ply:
         outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply"))
-    if len({str(p.resolve()) for p in outputs}) != len(outputs):
+    from ._cli_rig import figure_outputs, write_figures
+
+    figures = figure_outputs(args, with_std=bool(args.uncertainty))
+    every = outputs + list(figures.values())
+    if len({str(p.resolve()) for p in every}) != len(every):
         raise CLIError("output paths must differ from each other")
     views = [read_image(v) for v in args.views]
     shapes = {v.shape for v in views}
@@ -370,6 +374,7 @@ def _cmd_stereo(args) -> int:
         write_ply(outputs[k], pts, colors=cols, force=args.force)
     valid = np.isfinite(values)
     kind = "depth" if focal is not None else "disparity"
+    write_figures(figures, values, std, title=f"view {reference} ({Path(args.views[reference]).name})", unit=unit, quantity=kind)
     finite = values[valid]
     rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} {unit}" if finite.size else "none"
     print(
@@ -444,6 +449,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--uncertainty", metavar="FILE", help="also write the per-pixel standard deviation here")
     p.add_argument("--preview", metavar="PNG", help="also write a colour-mapped PNG")
     p.add_argument("--ply", metavar="FILE", help="also write a coloured point cloud (needs --focal-px, --baseline)")
+    p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (px or scene units); with --uncertainty also PNG_std.png")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
     p.add_argument("--levels", type=int, help="pyramid levels (default: from the image size)")
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions (docs/rig-format.md)")

@@ -40,6 +40,7 @@ __all__ = [
     "evaluate_dataset",
     "render_markdown",
     "error_map_png",
+    "to_jsonable",
 ]
 
 METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")

@@ -15,6 +15,7 @@ documented in ``docs/rig-format.md``; in short::
     velocity       = [2.0, 0.0, 0.0]   # moving camera rel. to the reference, units / unit time
     rotation_deg   = [0.0, 0.0, 0.0]   # its angular velocity, degrees / unit time
     frame_interval = 1.0               # time between consecutive images
+    # crossings    = [12, 40]          # two synchronised videos: frames at which the cameras coincide
 
     [stereo]                      # static rows (nfdepth stereo)
     baseline  = 2.0               # spacing of neighbouring views (scene units)
@@ -64,6 +65,7 @@ __all__ = [
     "rig_from_dict",
     "rig_to_toml",
     "load_poses",
+    "check_crossings",
     "stereo_options_from_rig",
     "dynamic_stereo_from_rig",
     "edge_depth_maps",
@@ -259,12 +261,19 @@ class MotionSpec:
     rotation_deg : ndarray, shape (3,)
         Its angular velocity ``w``, degrees per unit time.
     frame_interval : float
-        Time between consecutive images ``I_k``, ``I_k+1``.
+        Time between consecutive images ``I_k``, ``I_k+1`` (for two
+        synchronised videos: between consecutive frames).
+    crossings : tuple of int or None
+        Two synchronised videos (``nfdepth dynamic --moving-video``): the
+        0-based frame indices at which the two cameras coincide, strictly
+        increasing, each >= 2 (the five-image sequence needs two frames
+        before it). None when not given.
     """
 
     velocity: np.ndarray
     rotation_deg: np.ndarray = field(default_factory=lambda: np.zeros(3))
     frame_interval: float = 1.0
+    crossings: tuple | None = None
 
     def relative_motion(self) -> RigidMotion:
         """``(dV, dOmega) = (-T, -w)`` in radians (CONVENTIONS: a camera moving by T sees V = -T)."""
@@ -276,6 +285,7 @@ class MotionSpec:
             and np.array_equal(self.velocity, other.velocity)
             and np.array_equal(self.rotation_deg, other.rotation_deg)
             and self.frame_interval == other.frame_interval
+            and self.crossings == other.crossings
         )
 
 
@@ -434,13 +444,45 @@ def _parse_camera(table) -> PinholeCamera:
 
 
 def _parse_motion(table) -> MotionSpec:
-    t = _check_keys(table, "motion", ("velocity", "rotation_deg", "frame_interval"))
+    t = _check_keys(table, "motion", ("velocity", "rotation_deg", "frame_interval", "crossings"))
     velocity = _vector(t, "motion", "velocity", required=True)
     if not np.any(velocity):
         raise _fail("motion.velocity", t["velocity"], "a non-zero translation (depth needs a baseline between the cameras)")
     rotation = _vector(t, "motion", "rotation_deg", default=np.zeros(3))
     interval = _number(t, "motion", "frame_interval", required=False, positive=True, default=1.0)
-    return MotionSpec(velocity, rotation, interval)
+    crossings = None
+    if "crossings" in t:
+        try:
+            crossings = check_crossings(t["crossings"])
+        except (TypeError, ValueError) as exc:
+            raise _fail("motion.crossings", t["crossings"], str(exc)) from None
+    return MotionSpec(velocity, rotation, interval, crossings)
+
+
+def check_crossings(crossings) -> tuple:
+    """Validate crossing instants: a non-empty list of frame indices >= 2, strictly increasing.
+
+    Returns them as a tuple of int; raises ``ValueError`` (``TypeError`` for
+    non-integers) saying what was expected.
+    """
+    expected = "a non-empty list of frame indices (integers >= 2), strictly increasing"
+    if isinstance(crossings, (str, bytes)) or not hasattr(crossings, "__iter__"):
+        raise TypeError(expected)
+    values = list(crossings)
+    if not values:
+        raise ValueError(expected)
+    out = []
+    for v in values:
+        if isinstance(v, (float, np.floating)) and float(v).is_integer():
+            v = int(v)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+            raise TypeError(expected)
+        out.append(int(v))
+    if min(out) < 2:
+        raise ValueError(f"{expected}: frame {min(out)} has no two frames before it")
+    if any(b <= a for a, b in zip(out, out[1:])):
+        raise ValueError(expected)
+    return tuple(out)
 
 
 def _parse_stereo(table) -> StereoSpec:
@@ -579,6 +621,8 @@ def rig_to_toml(rig: Rig) -> str:
         m = rig.motion
         lines += ["", "[motion]", f"velocity = {_toml_value(m.velocity)}", f"rotation_deg = {_toml_value(m.rotation_deg)}"]
         lines.append(f"frame_interval = {_toml_value(m.frame_interval)}")
+        if m.crossings is not None:
+            lines.append(f"crossings = {_toml_value(list(m.crossings))}")
     if rig.stereo is not None:
         s = rig.stereo
         lines += ["", "[stereo]", f"baseline = {_toml_value(s.baseline)}"]

@@ -39,6 +39,27 @@ infinite weight.
 The differential method needs the motion per frame to be small: about
 0.2-2 px of disparity (``f |T| / Z``). Subsample the video (or pick frames)
 when the camera moves faster.
+
+Two synchronised videos (dynamic stereo)
+----------------------------------------
+:func:`dynamic_stereo_from_videos` is the paper's dynamic stereo (Fig. 3,
+eq. 4) on two synchronised videos: frame ``k`` of the moving camera's video
+``M`` and of the reference camera's video ``R`` are taken at the same
+instant. The relative normal flow is only defined where the two image planes
+coincide (the paper: "the two cameras come so close to each other at the
+time of consideration that correspondence between the two image planes is
+easy to establish"), so depth is computed at *crossing instants* ``c``, the
+frames at which the moving camera passes through the reference camera's
+position and orientation, from the interleaved five-image sequence::
+
+    I1 = M[c-2], I2 = R[c-1], I3 = M[c] and R[c], I4 = R[c+1], I5 = M[c+2]
+
+(:func:`interleaved_frames`). Away from a crossing the two cameras see
+different image planes and the flows cannot be subtracted pixel by pixel;
+no depth is produced there. ``[motion]`` gives the moving camera's motion
+relative to the reference one at the crossings (the same at every crossing),
+``frame_interval`` the time between consecutive video frames. See
+``docs/rig-format.md`` for the rigs this fits.
 """
 
 from __future__ import annotations
@@ -56,8 +77,9 @@ from scipy.spatial.transform import Rotation
 from ._validate import as_image, check_nonnegative_finite, check_positive_finite
 from .camera import PinholeCamera
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
-from .pipelines import static_stereo_edges
-from .rig import Rig, RigError, VideoSpec
+from .normal_flow import estimate_noise_std
+from .pipelines import EdgeDepth, static_stereo_edges
+from .rig import Rig, RigError, VideoSpec, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 
 __all__ = [
     "VideoDepthFrame",
@@ -69,6 +91,11 @@ __all__ = [
     "write_video_npz",
     "write_video_frame",
     "video_frame_names",
+    "CrossingDepth",
+    "SHARED_FRAME_CHOICES",
+    "interleaved_frames",
+    "dynamic_stereo_from_videos",
+    "write_crossings_npz",
 ]
 
 #: Extensions :func:`read_video` opens with ``cv2.VideoCapture``.
@@ -549,3 +576,228 @@ def write_video_frame(result: VideoDepthFrame, folder, *, force: bool = False) -
     folder = Path(folder)
     a, b = video_frame_names(result.index)
     return write_array(folder / a, result.depth, force=force), write_array(folder / b, result.depth_std, force=force)
+
+
+# ------------------------------------------------------------------ two synchronised videos
+
+#: How :func:`interleaved_frames` forms the shared image ``I3`` from ``M[c]`` and ``R[c]``.
+SHARED_FRAME_CHOICES = ("mean", "reference", "moving")
+
+#: A crossing whose ``M[c]`` and ``R[c]`` differ at the edge points by more than
+#: this many times the image noise (plus one grey level) is reported (UserWarning).
+_MISMATCH_FACTOR = 3.0
+
+
+@dataclass(frozen=True, eq=False)
+class CrossingDepth:
+    """Depth at one crossing instant of two synchronised videos.
+
+    Attributes
+    ----------
+    index : int
+        The crossing: 0-based frame index ``c`` of both videos.
+    result : EdgeDepth
+        Depth at the edge points of ``I3`` (:func:`nfdepth.pipelines.dynamic_stereo`).
+    depth, depth_std : ndarray, float32, shape (H, W)
+        The same as maps (:func:`nfdepth.rig.edge_depth_maps`), NaN off the
+        edge points.
+    registration_residual : float
+        RMS of ``M[c] - R[c]`` at the edge points (grey levels): about
+        ``sqrt(2)`` times the image noise when the cameras coincide at ``c``,
+        larger when they do not (then a ``UserWarning`` is issued).
+    noise_std : float
+        Image noise of ``M[c]`` and ``R[c]`` combined, ``hypot(n_M, n_R)``.
+    """
+
+    index: int
+    result: EdgeDepth
+    depth: np.ndarray
+    depth_std: np.ndarray
+    registration_residual: float
+    noise_std: float
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Pixels of the maps that have a depth."""
+        return np.isfinite(self.depth)
+
+
+def _shared(moving_c: np.ndarray, reference_c: np.ndarray, shared: str) -> np.ndarray:
+    if shared == "mean":
+        return 0.5 * (moving_c + reference_c)
+    return reference_c if shared == "reference" else moving_c
+
+
+def _check_shared(shared) -> str:
+    if shared not in SHARED_FRAME_CHOICES:
+        msg = f"shared must be one of {', '.join(SHARED_FRAME_CHOICES)}, got {shared!r}"
+        raise ValueError(msg)
+    return shared
+
+
+def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean") -> list:
+    """The paper's five-image sequence at crossing ``c`` of two synchronised videos.
+
+    Parameters
+    ----------
+    moving, reference : sequence of ndarray, shape (H, W)
+        Frames of the moving and the reference camera; frame ``k`` of both
+        taken at the same instant (indexable, e.g. lists).
+    crossing : int
+        Frame index ``c`` at which the two cameras coincide (``2 <= c <= N-3``).
+    shared : {"mean", "reference", "moving"}
+        ``I3``: the mean of ``M[c]`` and ``R[c]`` (default; halves the noise
+        variance when the cameras coincide), or either one.
+
+    Returns
+    -------
+    list of 5 ndarray
+        ``[M[c-2], R[c-1], I3, R[c+1], M[c+2]]``: ``I1, I3, I5`` from the
+        moving camera, ``I2, I3, I4`` from the reference one, at equal time
+        steps (one video frame), as :func:`nfdepth.pipelines.dynamic_stereo`
+        expects.
+    """
+    shared = _check_shared(shared)
+    (c,) = check_crossings([crossing])
+    n = min(len(moving), len(reference))
+    if c + 2 >= n:
+        msg = f"crossing {c} needs frames {c - 2}..{c + 2}, but the videos have {n} frames (0..{n - 1})"
+        raise ValueError(msg)
+    m = [as_image(f"moving frame {k}", moving[k], dtype=np.float32) for k in (c - 2, c, c + 2)]
+    r = [as_image(f"reference frame {k}", reference[k], dtype=np.float32) for k in (c - 1, c, c + 1)]
+    return [m[0], r[0], _shared(m[1], r[1], shared), r[2], m[2]]
+
+
+def _registration_residual(moving_c, reference_c, result: EdgeDepth) -> tuple[float, float]:
+    noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
+    if len(result) == 0:
+        return 0.0, noise
+    ii = np.floor(result.rows).astype(np.int64)
+    jj = np.floor(result.cols).astype(np.int64)
+    diff = moving_c.astype(np.float64)[ii, jj] - reference_c.astype(np.float64)[ii, jj]
+    return float(np.sqrt(np.mean(diff**2))), noise
+
+
+def dynamic_stereo_from_videos(
+    moving: Iterable,
+    reference: Iterable,
+    *,
+    rig: Rig,
+    crossings=None,
+    shared: str = "mean",
+    **options,
+) -> Iterator[CrossingDepth]:
+    """Dynamic stereo (paper eq. 4) at the crossing instants of two synchronised videos.
+
+    At each crossing ``c`` the five images ``M[c-2], R[c-1], M[c]|R[c],
+    R[c+1], M[c+2]`` (:func:`interleaved_frames`) go to
+    :func:`nfdepth.rig.dynamic_stereo_from_rig`. The frames are read in
+    lockstep and only five of each video are kept, so the videos may be long.
+    This is the library form of ``nfdepth dynamic --moving-video M
+    --reference-video R``.
+
+    Parameters
+    ----------
+    moving, reference : iterable of ndarray, shape (H, W)
+        Grey frames of the moving and the reference camera (e.g.
+        :func:`read_video`), frame ``k`` of both at the same instant.
+    rig : Rig
+        ``[camera]`` (both cameras' intrinsics) and ``[motion]``: the moving
+        camera's motion relative to the reference at the crossings, with
+        ``frame_interval`` the time between consecutive frames.
+    crossings : list of int, optional
+        Frame indices at which the cameras coincide (default:
+        ``[motion].crossings``); each needs two frames on either side.
+    shared : {"mean", "reference", "moving"}
+        How ``I3`` is formed from ``M[c]`` and ``R[c]``.
+    **options
+        Passed to :func:`nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...).
+
+    Yields
+    ------
+    CrossingDepth
+        One per crossing, in order, as soon as frame ``c + 2`` has been read.
+
+    Raises
+    ------
+    RigError
+        No ``[motion]``, no crossings, a frame size that differs from ``[camera]``.
+    ValueError
+        A crossing the videos do not cover (too short).
+
+    Warns
+    -----
+    UserWarning
+        When ``M[c]`` and ``R[c]`` differ at the edge points by more than
+        three times the noise plus one grey level: the cameras do not
+        coincide at ``c`` (wrong crossing index, or the rig is not one this
+        method fits) and the depths are biased.
+    """
+    import warnings
+
+    motion = rig._need("motion")
+    shared = _check_shared(shared)
+    if crossings is None:
+        if motion.crossings is None:
+            where = f"rig '{rig.source}'" if rig.source else "the rig"
+            raise RigError(f"{where}: motion.crossings is missing and no crossings were given: expected the frame indices at which the cameras coincide")
+        wanted = motion.crossings
+    else:
+        wanted = check_crossings(crossings)
+    pending = list(wanted)
+    keep = 5
+    m_win: list = []
+    r_win: list = []
+    n = 0
+    for n, (m, r) in enumerate(zip(moving, reference)):
+        for what, f in (("moving", m), ("reference", r)):
+            rig.check_image_shape(np.shape(f), what=f"{what} frame {n}")
+        m_win.append(as_image(f"moving frame {n}", m, dtype=np.float32))
+        r_win.append(as_image(f"reference frame {n}", r, dtype=np.float32))
+        m_win, r_win = m_win[-keep:], r_win[-keep:]
+        while pending and pending[0] + 2 == n:
+            c = pending.pop(0)
+            frames = interleaved_frames(m_win, r_win, 2, shared=shared)  # window index 2 is frame c
+            result = dynamic_stereo_from_rig(frames, rig, **options)
+            residual, noise = _registration_residual(m_win[2], r_win[2], result)
+            if residual > _MISMATCH_FACTOR * noise + 1.0:
+                warnings.warn(
+                    f"crossing {c}: the two cameras' frames {c} differ by {residual:.3g} grey levels (RMS at the edge points; "
+                    f"image noise {noise:.3g}): the cameras do not coincide at frame {c}, so the depths are biased; "
+                    "check the crossing index and that the videos are synchronised",
+                    UserWarning,
+                    stacklevel=2,
+                )
+            depth, std = edge_depth_maps(result)
+            yield CrossingDepth(c, result, depth, std, residual, noise)
+        if not pending:
+            return
+    count = n + 1 if (m_win or r_win) else 0
+    msg = (
+        f"crossing {pending[0]} needs frames {pending[0] - 2}..{pending[0] + 2}, but the videos end after {count} frames"
+        + (f" (0..{count - 1})" if count else "")
+    )
+    raise ValueError(msg)
+
+
+def write_crossings_npz(results, path, *, camera: PinholeCamera | None = None, force: bool = False) -> Path:
+    """Write :class:`CrossingDepth` results to one ``.npz``, atomically.
+
+    Holds ``crossing`` (N,), ``registration_residual`` (N,), ``noise_std``
+    (N,) and float32 ``(N, H, W)`` stacks ``depth`` and ``depth_std`` (NaN
+    off the edge points); with ``camera`` also ``focal_px``, ``cx_px``,
+    ``cy_px``.
+    """
+    from .io import atomic_write
+
+    results = list(results)
+    payload = {
+        "crossing": np.array([r.index for r in results], dtype=np.int64),
+        "registration_residual": np.array([r.registration_residual for r in results], dtype=float),
+        "noise_std": np.array([r.noise_std for r in results], dtype=float),
+    }
+    for name in ("depth", "depth_std"):
+        payload[name] = np.stack([np.asarray(getattr(r, name), dtype=np.float32) for r in results]) if results else np.zeros((0, 0, 0), np.float32)
+    if camera is not None:
+        payload.update(focal_px=np.float64(camera.focal_px), cx_px=np.float64(camera.cx_px), cy_px=np.float64(camera.cy_px))
+    return atomic_write(Path(path), lambda fh: np.savez_compressed(fh, **payload), force=force)
