@@ -77,7 +77,8 @@ def _rendered(shape, n=3, shift=0.8, seed=0):
     frames = []
     for k in range(n):
         t = k - (n - 1) / 2
-        M = np.float32([[1, 0, shift * t], [0, 1, 0]])
+        # content moves toward -col from frame to frame: a camera moving toward +X
+        M = np.float32([[1, 0, -shift * t], [0, 1, 0]])
         warped = cv2.warpAffine(base, M, (W + 2 * pad, H + 2 * pad), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
         frames.append(np.ascontiguousarray(warped[pad : pad + H, pad : pad + W]))
     return frames
