@@ -307,3 +307,22 @@ def test_edge_point_on_the_occluded_side_of_a_depth_step():
     assert _occluded_side(d, img, rows, cols, 0.5).tolist() == [False, True]
     # no depth step: nothing is flagged
     assert not _occluded_side(np.full_like(d, 3.0), img, rows, cols, 0.5).any()
+
+
+def test_streaming_wta_matches_full_volume():
+    """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones."""
+    from nfdepth.stereo import _streaming_wta, _wta_subpixel
+
+    rng = np.random.default_rng(0)
+    for n, step in ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3)):
+        vol = rng.random((n, 12, 16)).astype(np.float32)
+        vol[:, :2] = np.inf  # pixels no view sees
+        vol[rng.random(vol.shape) < 0.05] = np.inf
+        cand = np.arange(n) * step + 1.0
+        d, c0, _ = _wta_subpixel(vol, cand)
+        near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
+        c2 = np.min(np.where(near, np.inf, vol), axis=0)
+        d_s, c0_s, c2_s = _streaming_wta(iter(vol), cand, exclude_px=1.0)
+        np.testing.assert_array_equal(d_s, d)
+        np.testing.assert_array_equal(c0_s, c0)
+        np.testing.assert_array_equal(c2_s, c2)

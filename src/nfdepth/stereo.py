@@ -53,7 +53,8 @@ measurement in a coarse-to-fine warping scheme:
 3c. At the finest level (``cost_volume``, default) the dense field is
    replaced by the minimum of an aggregated matching-cost volume over
    constant disparities (``cost_step_px`` apart, over the 0.5-99.5 % range
-   of the coarse-to-fine field +-2 px): per view the truncated absolute
+   of the coarse-to-fine field +-2 px; streamed slice by slice, so memory is
+   O(pixels) while time grows with the disparity range): per view the truncated absolute
    difference of intensity and column gradient, averaged over the views on
    each side of the reference, aggregated by a guided filter of radius
    ``cost_radius`` (cost-volume filtering, Hosni et al. 2011), better side
@@ -402,22 +403,22 @@ def _shift_cols(img, s):
     return cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
 
 
-def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
-    """Aggregated one-sided matching cost of every constant disparity in ``candidates``.
+def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
+    """Aggregated one-sided matching cost of each constant disparity in ``candidates``, one slice at a time.
 
     Per view the cost is ``(1 - alpha) min(|I_k - I_ref|, tau_i) + alpha
     min(|G_k - G_ref|, tau_g)`` (intensity and column gradient, truncated;
     cost-volume filtering after Hosni et al. 2011), averaged over the views on
     one side of the reference, aggregated by the guided filter ``agg``; the
-    better side wins (Kang & Szeliski 2001).
+    better side wins (Kang & Szeliski 2001). Yields one ``(h, w)`` slice per
+    candidate, so the volume is never held in memory.
     """
     i_ref, g_ref = feats[ref]
     h, w = i_ref.shape
     cols = np.arange(w, dtype=np.float32)[None, :]
     sides = [[k for k in range(len(t)) if k != ref and np.sign(t[k]) == sgn] for sgn in (-1, 1)]
     sides = [ks for ks in sides if ks]
-    vol = np.empty((len(candidates), h, w), np.float32)
-    for j, dj in enumerate(candidates):
+    for dj in candidates:
         best = None
         for ks in sides:
             acc = np.zeros((h, w), np.float32)
@@ -431,10 +432,14 @@ def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
                 cnt += ins
             mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
             a = agg(mean)
-            a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf)
+            a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf).astype(np.float32)
             best = a if best is None else np.minimum(best, a)
-        vol[j] = best
-    return vol
+        yield best
+
+
+def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
+    """The whole ``(len(candidates), h, w)`` volume of :func:`_cost_slices` (small inputs and tests)."""
+    return np.stack(list(_cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)))
 
 
 def _wta_subpixel(vol, candidates):
@@ -445,6 +450,12 @@ def _wta_subpixel(vol, candidates):
     c0 = np.take_along_axis(vol, idx[None], 0)[0]
     cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
     cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
+    d, curv = _v_fit(idx, c0, cm, cp, candidates, step)
+    return d, c0, curv
+
+
+def _v_fit(idx, c0, cm, cp, candidates, step):
+    n = len(candidates)
     with np.errstate(invalid="ignore", divide="ignore"):
         curv = cm - 2.0 * c0 + cp
         # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
@@ -454,7 +465,65 @@ def _wta_subpixel(vol, candidates):
         off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
     off = np.clip(np.nan_to_num(off), -0.5, 0.5)
     d = np.asarray(candidates, np.float32)[idx] + off * step
-    return d.astype(np.float32), c0, curv
+    return d.astype(np.float32), curv
+
+
+def _streaming_wta(slices, candidates, *, exclude_px=1.0):
+    """:func:`_wta_subpixel` and the uniqueness cost over a stream of cost slices, in O(pixels) memory.
+
+    Returns ``(d, c_best, c_second)``: the sub-sample winner, its cost, and
+    the best cost among candidates more than ``exclude_px`` from ``d`` -- the
+    same values as the full volume gives. Kept per pixel: the winner's index
+    and cost, the costs of the ``m - 1`` slices either side of it, the
+    minimum over slices at least ``m`` before it and at least ``m`` after it
+    (``m`` such that those are always more than ``exclude_px`` from any
+    sub-sample position of the winner), and a ring of the last ``m`` slices.
+    """
+    cand32 = np.asarray(candidates, np.float32)
+    n = len(candidates)
+    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
+    m = int(np.floor((exclude_px + 0.5 * step) / step)) + 1
+    ring = [None] * m  # ring[j % m] = slice j
+    idx = best = pre = after = win = None
+    for j, c in enumerate(slices):
+        if idx is None:
+            h, w = c.shape
+            idx = np.zeros((h, w), np.int32)
+            best = np.full((h, w), np.inf, np.float32)
+            pre = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. j - m
+            after = np.full((h, w), np.inf, np.float32)  # min of slices idx + m .. j
+            win = np.full((2 * m - 1, h, w), np.inf, np.float32)  # win[m - 1 + k] = slice idx + k
+            far_before = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. idx - m
+        if j >= m:
+            np.minimum(pre, ring[j % m], out=pre)
+        ring[j % m] = c
+        new = c < best
+        rel = j - idx
+        # pixels whose winner stays: record the slice near it, or fold it into the far minimum
+        for k in range(1, m):
+            np.copyto(win[m - 1 + k], c, where=(rel == k) & ~new)
+        np.minimum(after, np.where((rel >= m) & ~new, c, np.inf), out=after)
+        if new.any():
+            idx[new] = j
+            best[new] = c[new]
+            win[m - 1][new] = c[new]
+            for k in range(1, m):
+                win[m - 1 - k][new] = ring[(j - k) % m][new] if j - k >= 0 else np.inf
+                win[m - 1 + k][new] = np.inf
+            after[new] = np.inf
+            far_before[new] = pre[new]  # slices 0 .. j - m
+    if idx is None:
+        msg = "no cost slices"
+        raise ValueError(msg)
+    cm = np.where(idx > 0, win[m - 2], best) if m > 1 else best
+    cp = np.where(idx < n - 1, win[m], best) if m > 1 else best
+    d, _ = _v_fit(idx, best, cm, cp, candidates, step)
+    c_second = np.minimum(far_before, after)
+    for k in range(-(m - 1), m):
+        jj = np.clip(idx + k, 0, n - 1)
+        far = (np.abs(cand32[jj] - d) > exclude_px) & (idx + k >= 0) & (idx + k < n)
+        np.minimum(c_second, np.where(far, win[m - 1 + k], np.inf), out=c_second)
+    return d, best, c_second
 
 
 def _nodes_from_pixels(d: np.ndarray) -> np.ndarray:
@@ -970,14 +1039,13 @@ def static_stereo(
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
             agg = _GuidedAggregator(guide[0], cost_radius, cost_eps)
-            vol = _cost_volume(feats, t, ref, candidates, agg, tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha)
-            d, c_best, _ = _wta_subpixel(vol, candidates)
+            # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
+            slices = _cost_slices(feats, t, ref, candidates, agg, tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha)
+            d, c_best, c_second = _streaming_wta(slices, candidates, exclude_px=1.0)
+            del feats, src
             # uniqueness: the best cost against the best one more than 1 px away
-            near = np.abs(np.asarray(candidates, np.float32)[:, None, None] - d[None]) <= 1.0
-            c_second = np.min(np.where(near, np.inf, vol), axis=0)
             with np.errstate(invalid="ignore", divide="ignore"):
                 margin = (c_second - c_best) / np.maximum(c_best, 1e-6 * spread)
-            del vol, near
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
