@@ -72,6 +72,19 @@ class BaselineResult:
 # ----------------------------------------------------------------- helpers
 
 
+
+def _check_views_reference(views, reference) -> list:
+    """The views as a list (at least 2), with ``reference`` an index into them."""
+    views = list(views)
+    n = len(views)
+    if n < 2:
+        msg = f"views must hold at least 2 images, got {n}"
+        raise ValueError(msg)
+    if isinstance(reference, bool) or int(reference) != reference or not 0 <= reference < n:
+        msg = f"reference must index one of the {n} views (0..{n - 1}), got {reference!r}"
+        raise ValueError(msg)
+    return views
+
 def _as_uint8(image, name: str) -> np.ndarray:
     a = np.asarray(image)
     if a.ndim == 3 and a.shape[2] in (3, 4):
@@ -253,14 +266,8 @@ def pair_disparity_at_reference(views, *, reference: int, method: str = "sgbm", 
         ``max_disparity`` is the neighbour-step maximum and is scaled by the
         spacing here.
     """
-    views = list(views)
+    views = _check_views_reference(views, reference)
     n = len(views)
-    if n < 2:
-        msg = f"views must hold at least 2 images, got {n}"
-        raise ValueError(msg)
-    if isinstance(reference, bool) or int(reference) != reference or not 0 <= reference < n:
-        msg = f"reference must index one of the {n} views (0..{n - 1}), got {reference!r}"
-        raise ValueError(msg)
     fn = {"sgbm": sgbm_disparity, "bm": stereo_bm_disparity}.get(method)
     if fn is None:
         msg = f"method must be 'sgbm' or 'bm', got {method!r}"
@@ -334,14 +341,8 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
     BaselineResult
         Dense disparity (every pixel; NaN only where the flow is not finite).
     """
-    views = list(views)
+    views = _check_views_reference(views, reference)
     n = len(views)
-    if n < 2:
-        msg = f"views must hold at least 2 images, got {n}"
-        raise ValueError(msg)
-    if isinstance(reference, bool) or int(reference) != reference or not 0 <= reference < n:
-        msg = f"reference must index one of the {n} views (0..{n - 1}), got {reference!r}"
-        raise ValueError(msg)
     if method not in ("dis", "farneback"):
         msg = f"method must be 'dis' or 'farneback', got {method!r}"
         raise ValueError(msg)
