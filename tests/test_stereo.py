@@ -311,7 +311,7 @@ def test_edge_point_on_the_occluded_side_of_a_depth_step():
 
 def test_streaming_wta_matches_full_volume():
     """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones."""
-    from nfdepth.stereo import _streaming_wta, _wta_subpixel
+    from nfdepth._cost_volume import _streaming_wta, _wta_subpixel
 
     rng = np.random.default_rng(0)
     for n, step in ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3)):
@@ -326,3 +326,60 @@ def test_streaming_wta_matches_full_volume():
         np.testing.assert_array_equal(d_s, d)
         np.testing.assert_array_equal(c0_s, c0)
         np.testing.assert_array_equal(c2_s, c2)
+
+
+@pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
+def test_numba_streaming_wta_matches_full_volume():
+    """The fused winner-take-all (chunks of candidates, state in locals) equals the full-volume one."""
+    from nfdepth._cost_volume import _nb_streaming_wta, _wta_subpixel
+
+    rng = np.random.default_rng(1)
+    for n, step, k in ((40, 0.5, 8), (7, 0.5, 3), (2, 0.5, 8), (1, 0.5, 8), (30, 0.7, 4), (25, 0.3, 8)):
+        vol = rng.random((n, 12, 16)).astype(np.float32)
+        vol[:, :2] = np.inf
+        vol[rng.random(vol.shape) < 0.05] = np.inf
+        cand = np.arange(n) * step + 1.0
+        d, c0, _ = _wta_subpixel(vol, cand)
+        near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
+        c2 = np.min(np.where(near, np.inf, vol), axis=0)
+        chunks = ((np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, -1)), len(vol[j : j + k])) for j in range(0, n, k))
+        d_s, c0_s, c2_s = _nb_streaming_wta(chunks, cand, vol.shape[1:], exclude_px=1.0)
+        np.testing.assert_array_equal(d_s, d)
+        np.testing.assert_array_equal(c0_s, c0)
+        np.testing.assert_array_equal(c2_s, c2)
+
+
+@pytest.mark.parametrize("positions", [(0, 1, 2), (0, 1, 2, 3, 4), (0.0, 1.3, 2.0)])
+def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
+    """The fused numba cost volume gives the NumPy/OpenCV reference's winner, cost and uniqueness.
+
+    Integer positions put every candidate shift on the half-pixel grid, where
+    cv2.warpAffine's 1/32-px fixed-point weights are exact: the two agree to
+    float32 rounding (the box sums run in another order: a few ulp, so 1e-5
+    relative). Fractional positions: cv2 rounds the sample position to
+    1/32 px, the fused kernel does not, so winners may differ by the V-fit of
+    that (< 1/64 px) resampling.
+    """
+    from nfdepth import _cost_volume, fast
+
+    if _cost_volume._njit is None:
+        pytest.skip("numba not installed")
+    ref = len(positions) // 2
+    views = _plane_views(3.2, positions=positions, reference=ref)
+    t = np.asarray(positions, float) - positions[ref]
+    feats = _cost_volume._match_features(views)
+    spread = float(np.percentile(views[ref], 99) - np.percentile(views[ref], 1))
+    guide = ((views[ref] - np.percentile(views[ref], 1)) / spread).astype(np.float32)
+    cand = np.arange(-1.0, 8.0, 0.5)
+    kw = dict(radius=4, eps=1e-4, tau_i=0.03 * spread, tau_g=0.01 * spread, alpha=0.9, exclude_px=1.0)
+    out = {}
+    for use in (False, True):
+        monkeypatch.setattr(fast, "USE_NUMBA", use)
+        out[use] = _cost_volume.best_disparity(feats, t, ref, cand, guide, **kw)
+    if all(float(p).is_integer() for p in positions):
+        for a, b in zip(out[True], out[False]):
+            np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
+    else:
+        d_nb, d_np = out[True][0], out[False][0]
+        assert np.median(np.abs(d_nb - d_np)) < 0.02
+        assert np.mean(np.abs(d_nb - d_np) < 0.1) > 0.99

@@ -54,7 +54,8 @@ measurement in a coarse-to-fine warping scheme:
    replaced by the minimum of an aggregated matching-cost volume over
    constant disparities (``cost_step_px`` apart, over the 0.5-99.5 % range
    of the coarse-to-fine field +-2 px; streamed slice by slice, so memory is
-   O(pixels) while time grows with the disparity range): per view the truncated absolute
+   O(pixels) while time grows with the disparity range; :mod:`nfdepth._cost_volume`,
+   fused numba kernels when numba is installed): per view the truncated absolute
    difference of intensity and column gradient, averaged over the views on
    each side of the reference, aggregated by a guided filter of radius
    ``cost_radius`` (cost-volume filtering, Hosni et al. 2011), better side
@@ -129,6 +130,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._cost_volume import _match_features, best_disparity
 from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
@@ -372,158 +374,6 @@ def _propagate(smoothed, t, ref, d, guide, *, rounds, radius, eps):
             best_cost = np.where(better, cost, best_cost)
         d = best.astype(np.float32)
     return d
-
-
-class _GuidedAggregator:
-    """Guided filter (He et al. 2010) with the guide statistics computed once."""
-
-    def __init__(self, guide, radius, eps):
-        self.g = guide.astype(np.float32)
-        self.r = int(radius)
-        self.mi = _box(self.g, self.r)
-        vi = _box(self.g * self.g, self.r) - self.mi * self.mi
-        self.inv = (1.0 / (np.maximum(vi, 0.0) + np.float32(eps))).astype(np.float32)
-
-    def __call__(self, p):
-        mp = _box(p, self.r)
-        a = (_box(self.g * p, self.r) - self.mi * mp) * self.inv
-        b = mp - a * self.mi
-        return (_box(a, self.r) * self.g + _box(b, self.r)).astype(np.float32)
-
-
-def _match_features(smoothed):
-    """Intensity and column gradient of every view, for the truncated matching cost."""
-    return [(s, cv2.Sobel(s, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)) for s in smoothed]
-
-
-def _shift_cols(img, s):
-    """``out(r, c) = img(r, c - s)`` (linear interpolation, border replicated)."""
-    h, w = img.shape
-    m = np.array([[1.0, 0.0, -float(s)], [0.0, 1.0, 0.0]], np.float64)
-    return cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
-
-
-def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
-    """Aggregated one-sided matching cost of each constant disparity in ``candidates``, one slice at a time.
-
-    Per view the cost is ``(1 - alpha) min(|I_k - I_ref|, tau_i) + alpha
-    min(|G_k - G_ref|, tau_g)`` (intensity and column gradient, truncated;
-    cost-volume filtering after Hosni et al. 2011), averaged over the views on
-    one side of the reference, aggregated by the guided filter ``agg``; the
-    better side wins (Kang & Szeliski 2001). Yields one ``(h, w)`` slice per
-    candidate, so the volume is never held in memory.
-    """
-    i_ref, g_ref = feats[ref]
-    h, w = i_ref.shape
-    cols = np.arange(w, dtype=np.float32)[None, :]
-    sides = [[k for k in range(len(t)) if k != ref and np.sign(t[k]) == sgn] for sgn in (-1, 1)]
-    sides = [ks for ks in sides if ks]
-    for dj in candidates:
-        best = None
-        for ks in sides:
-            acc = np.zeros((h, w), np.float32)
-            cnt = np.zeros((1, w), np.float32)
-            for k in ks:
-                s = float(t[k]) * float(dj)
-                ins = ((cols - s) >= 0) & ((cols - s) <= w - 1)
-                ci = np.minimum(np.abs(_shift_cols(feats[k][0], s) - i_ref), tau_i)
-                cg = np.minimum(np.abs(_shift_cols(feats[k][1], s) - g_ref), tau_g)
-                acc += np.where(ins, (1.0 - alpha) * ci + alpha * cg, 0.0)
-                cnt += ins
-            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
-            a = agg(mean)
-            a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf).astype(np.float32)
-            best = a if best is None else np.minimum(best, a)
-        yield best
-
-
-def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
-    """The whole ``(len(candidates), h, w)`` volume of :func:`_cost_slices` (small inputs and tests)."""
-    return np.stack(list(_cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)))
-
-
-def _wta_subpixel(vol, candidates):
-    """Winner-take-all over the cost volume with a sub-sample (equiangular) fit over its neighbours."""
-    idx = np.argmin(vol, axis=0)
-    n = len(candidates)
-    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
-    c0 = np.take_along_axis(vol, idx[None], 0)[0]
-    cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
-    cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
-    d, curv = _v_fit(idx, c0, cm, cp, candidates, step)
-    return d, c0, curv
-
-
-def _v_fit(idx, c0, cm, cp, candidates, step):
-    n = len(candidates)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        curv = cm - 2.0 * c0 + cp
-        # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
-        # about its minimum, and a parabola would pull toward the samples
-        # (Shimizu & Okutomi 2005)
-        slope = np.maximum(cm, cp) - c0
-        off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
-    off = np.clip(np.nan_to_num(off), -0.5, 0.5)
-    d = np.asarray(candidates, np.float32)[idx] + off * step
-    return d.astype(np.float32), curv
-
-
-def _streaming_wta(slices, candidates, *, exclude_px=1.0):
-    """:func:`_wta_subpixel` and the uniqueness cost over a stream of cost slices, in O(pixels) memory.
-
-    Returns ``(d, c_best, c_second)``: the sub-sample winner, its cost, and
-    the best cost among candidates more than ``exclude_px`` from ``d`` -- the
-    same values as the full volume gives. Kept per pixel: the winner's index
-    and cost, the costs of the ``m - 1`` slices either side of it, the
-    minimum over slices at least ``m`` before it and at least ``m`` after it
-    (``m`` such that those are always more than ``exclude_px`` from any
-    sub-sample position of the winner), and a ring of the last ``m`` slices.
-    """
-    cand32 = np.asarray(candidates, np.float32)
-    n = len(candidates)
-    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
-    m = int(np.floor((exclude_px + 0.5 * step) / step)) + 1
-    ring = [None] * m  # ring[j % m] = slice j
-    idx = best = pre = after = win = None
-    for j, c in enumerate(slices):
-        if idx is None:
-            h, w = c.shape
-            idx = np.zeros((h, w), np.int32)
-            best = np.full((h, w), np.inf, np.float32)
-            pre = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. j - m
-            after = np.full((h, w), np.inf, np.float32)  # min of slices idx + m .. j
-            win = np.full((2 * m - 1, h, w), np.inf, np.float32)  # win[m - 1 + k] = slice idx + k
-            far_before = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. idx - m
-        if j >= m:
-            np.minimum(pre, ring[j % m], out=pre)
-        ring[j % m] = c
-        new = c < best
-        rel = j - idx
-        # pixels whose winner stays: record the slice near it, or fold it into the far minimum
-        for k in range(1, m):
-            np.copyto(win[m - 1 + k], c, where=(rel == k) & ~new)
-        np.minimum(after, np.where((rel >= m) & ~new, c, np.inf), out=after)
-        if new.any():
-            idx[new] = j
-            best[new] = c[new]
-            win[m - 1][new] = c[new]
-            for k in range(1, m):
-                win[m - 1 - k][new] = ring[(j - k) % m][new] if j - k >= 0 else np.inf
-                win[m - 1 + k][new] = np.inf
-            after[new] = np.inf
-            far_before[new] = pre[new]  # slices 0 .. j - m
-    if idx is None:
-        msg = "no cost slices"
-        raise ValueError(msg)
-    cm = np.where(idx > 0, win[m - 2], best) if m > 1 else best
-    cp = np.where(idx < n - 1, win[m], best) if m > 1 else best
-    d, _ = _v_fit(idx, best, cm, cp, candidates, step)
-    c_second = np.minimum(far_before, after)
-    for k in range(-(m - 1), m):
-        jj = np.clip(idx + k, 0, n - 1)
-        far = (np.abs(cand32[jj] - d) > exclude_px) & (idx + k >= 0) & (idx + k < n)
-        np.minimum(c_second, np.where(far, win[m - 1 + k], np.inf), out=c_second)
-    return d, best, c_second
 
 
 def _nodes_from_pixels(d: np.ndarray) -> np.ndarray:
@@ -978,7 +828,8 @@ def static_stereo(
         raise ValueError(msg)
     levels = int(levels)
     noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
-    spread = float(np.percentile(views[ref], 99) - np.percentile(views[ref], 1))
+    p1, p99 = np.percentile(views[ref], [1, 99])
+    spread = float(p99 - p1)
     noise_floor = max(noise, 1e-3 * spread, 1e-6)
 
     pyramids = [[v] for v in views]
@@ -991,7 +842,7 @@ def static_stereo(
     d = np.zeros(pyramids[0][-1].shape, np.float32)
     var = np.full(d.shape, np.inf, np.float32)
     guided_radius = max(1, int(round(guided_scale * dense_window_px)))
-    guide = [(gaussian_smooth(lv, sigma_px=0.5) - np.float32(np.percentile(views[ref], 1))) / np.float32(max(spread, 1e-6)) for lv in pyramids[ref]]
+    guide = [(gaussian_smooth(lv, sigma_px=0.5) - np.float32(p1)) / np.float32(max(spread, 1e-6)) for lv in pyramids[ref]]
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
         s_c = noise_floor * _PYRDOWN_NOISE**level * gain  # noise std of one cell value
@@ -1003,7 +854,10 @@ def static_stereo(
         sub_sm = [smoothed[k] for k in active]
         sub_t = t[active]
         sub_ref = active.index(ref)
-        for _ in range(int(iterations_per_level)):
+        # With the cost volume the finest level's differential field only sets the
+        # search range, which the next coarser level gives as well (+-2 px margin).
+        skip = cost_volume and level == 0 and levels > 1
+        for _ in range(0 if skip else int(iterations_per_level)):
             m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
             num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
@@ -1027,7 +881,7 @@ def static_stereo(
             delta = np.where(ok, np.clip(delta, -1.0, 1.0), 0.0).astype(np.float32)
             d = d + delta
             var = np.where(ok, v_new, var).astype(np.float32)
-        if median_px > 1:
+        if median_px > 1 and not skip:
             d = cv2.medianBlur(d, median_px)
         if cost_volume and level == 0:
             lo = np.floor(np.percentile(d, 0.5)) - 2.0
@@ -1038,10 +892,11 @@ def static_stereo(
             candidates = np.arange(lo, hi + 0.5 * step, step, dtype=np.float64)
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
-            agg = _GuidedAggregator(guide[0], cost_radius, cost_eps)
             # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
-            slices = _cost_slices(feats, t, ref, candidates, agg, tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha)
-            d, c_best, c_second = _streaming_wta(slices, candidates, exclude_px=1.0)
+            d, c_best, c_second = best_disparity(
+                feats, t, ref, candidates, guide[0], radius=cost_radius, eps=cost_eps,
+                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0,
+            )
             del feats, src
             # uniqueness: the best cost against the best one more than 1 px away
             with np.errstate(invalid="ignore", divide="ignore"):

@@ -1,0 +1,510 @@
+"""The aggregated matching-cost volume of static stereo and its winner-take-all.
+
+Step 3c of :mod:`nfdepth.stereo`: for every constant disparity ``d_j`` of a
+candidate list, per view ``k`` the truncated absolute difference of
+intensity and column gradient between the reference and view ``k`` shifted
+by ``t_k d_j``, averaged over the views on one side of the reference,
+aggregated by a guided filter (He et al. 2010; cost-volume filtering, Hosni
+et al. 2011); the better side wins (Kang & Szeliski 2001). The winner over
+the candidates gets an equiangular sub-sample fit, and the best cost more
+than ``exclude_px`` away from it measures how unique the match is.
+
+Two implementations with the same arithmetic (float32 costs, float64 box
+sums):
+
+* NumPy/OpenCV (:func:`_cost_slices` + :func:`_streaming_wta`), the
+  reference and the fallback without numba: about 30 full-image array
+  operations and eight ``cv2.boxFilter`` calls per candidate.
+* numba (:func:`_nb_best_disparity`, used when :data:`nfdepth.fast.USE_NUMBA`):
+  per candidate and side three fused passes -- the side's mean cost (the
+  view shift is constant along a row, so it is a fixed-weight two-tap
+  interpolation), the guided filter's first box sums with its
+  coefficients, the second box sums with the output -- as running sums in
+  float64 (``cv2.boxFilter``'s own accumulator type), then the
+  winner-take-all update over chunks of candidates, the per-pixel state
+  kept in locals across a chunk. Results agree with the reference to
+  float32 rounding (box sums in another order: a few ulp; on the 640 x 480
+  Middlebury Art crop of the benchmark they are bit-identical); a cost tie
+  within that rounding can pick the other candidate.
+
+Both stream the candidates, so memory is O(pixels) whatever the disparity
+range.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from . import fast as _fast
+
+try:  # optional compiled kernels; the NumPy/OpenCV path otherwise
+    from numba import njit as _njit
+except ImportError:  # pragma: no cover - depends on the environment
+    _njit = None
+
+_CHUNK = 8  # candidates per winner-take-all update of the numba path
+
+
+def _box(a: np.ndarray, radius: int) -> np.ndarray:
+    return cv2.boxFilter(a, -1, (2 * radius + 1, 2 * radius + 1), normalize=True, borderType=cv2.BORDER_REFLECT)
+
+
+class _GuidedAggregator:
+    """Guided filter (He et al. 2010) with the guide statistics computed once."""
+
+    def __init__(self, guide, radius, eps):
+        self.g = guide.astype(np.float32)
+        self.r = int(radius)
+        self.mi = _box(self.g, self.r)
+        vi = _box(self.g * self.g, self.r) - self.mi * self.mi
+        self.inv = (1.0 / (np.maximum(vi, 0.0) + np.float32(eps))).astype(np.float32)
+
+    def __call__(self, p):
+        mp = _box(p, self.r)
+        a = (_box(self.g * p, self.r) - self.mi * mp) * self.inv
+        b = mp - a * self.mi
+        return (_box(a, self.r) * self.g + _box(b, self.r)).astype(np.float32)
+
+
+def _match_features(smoothed):
+    """Intensity and column gradient of every view, for the truncated matching cost."""
+    return [(s, cv2.Sobel(s, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)) for s in smoothed]
+
+
+def _shift_cols(img, s):
+    """``out(r, c) = img(r, c - s)`` (linear interpolation, border replicated)."""
+    h, w = img.shape
+    m = np.array([[1.0, 0.0, -float(s)], [0.0, 1.0, 0.0]], np.float64)
+    return cv2.warpAffine(img, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _sides(t, ref):
+    """View indices left and right of the reference (each non-empty list)."""
+    sides = [[k for k in range(len(t)) if k != ref and np.sign(t[k]) == sgn] for sgn in (-1, 1)]
+    return [ks for ks in sides if ks]
+
+
+def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
+    """Aggregated one-sided matching cost of each constant disparity in ``candidates``, one slice at a time.
+
+    Per view the cost is ``(1 - alpha) min(|I_k - I_ref|, tau_i) + alpha
+    min(|G_k - G_ref|, tau_g)`` (intensity and column gradient, truncated;
+    cost-volume filtering after Hosni et al. 2011), averaged over the views on
+    one side of the reference, aggregated by the guided filter ``agg``; the
+    better side wins (Kang & Szeliski 2001). Yields one ``(h, w)`` slice per
+    candidate, so the volume is never held in memory.
+    """
+    i_ref, g_ref = feats[ref]
+    h, w = i_ref.shape
+    cols = np.arange(w, dtype=np.float32)[None, :]
+    sides = _sides(t, ref)
+    for dj in candidates:
+        best = None
+        for ks in sides:
+            acc = np.zeros((h, w), np.float32)
+            cnt = np.zeros((1, w), np.float32)
+            for k in ks:
+                s = float(t[k]) * float(dj)
+                ins = ((cols - s) >= 0) & ((cols - s) <= w - 1)
+                ci = np.minimum(np.abs(_shift_cols(feats[k][0], s) - i_ref), tau_i)
+                cg = np.minimum(np.abs(_shift_cols(feats[k][1], s) - g_ref), tau_g)
+                acc += np.where(ins, (1.0 - alpha) * ci + alpha * cg, 0.0)
+                cnt += ins
+            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
+            a = agg(mean)
+            a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf).astype(np.float32)
+            best = a if best is None else np.minimum(best, a)
+        yield best
+
+
+def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
+    """The whole ``(len(candidates), h, w)`` volume of :func:`_cost_slices` (small inputs and tests)."""
+    return np.stack(list(_cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)))
+
+
+def _wta_subpixel(vol, candidates):
+    """Winner-take-all over the cost volume with a sub-sample (equiangular) fit over its neighbours."""
+    idx = np.argmin(vol, axis=0)
+    n = len(candidates)
+    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
+    c0 = np.take_along_axis(vol, idx[None], 0)[0]
+    cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
+    cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
+    d, curv = _v_fit(idx, c0, cm, cp, candidates, step)
+    return d, c0, curv
+
+
+def _v_fit(idx, c0, cm, cp, candidates, step):
+    n = len(candidates)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        curv = cm - 2.0 * c0 + cp
+        # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
+        # about its minimum, and a parabola would pull toward the samples
+        # (Shimizu & Okutomi 2005)
+        slope = np.maximum(cm, cp) - c0
+        off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
+    off = np.clip(np.nan_to_num(off), -0.5, 0.5)
+    d = np.asarray(candidates, np.float32)[idx] + off * step
+    return d.astype(np.float32), curv
+
+
+def _window_half(candidates, exclude_px):
+    """``m``: slices at least ``m`` from the winner are always more than ``exclude_px`` from its sub-sample position."""
+    step = float(candidates[1] - candidates[0]) if len(candidates) > 1 else 1.0
+    return int(np.floor((exclude_px + 0.5 * step) / step)) + 1, step
+
+
+def _wta_finish(idx, best, win, far, candidates, step, m, exclude_px):
+    """Sub-sample winner and uniqueness cost from the streamed state (see :func:`_streaming_wta`)."""
+    n = len(candidates)
+    cand32 = np.asarray(candidates, np.float32)
+    cm = np.where(idx > 0, win[m - 2], best) if m > 1 else best
+    cp = np.where(idx < n - 1, win[m], best) if m > 1 else best
+    d, _ = _v_fit(idx, best, cm, cp, candidates, step)
+    c_second = far.copy()
+    for k in range(-(m - 1), m):
+        jj = np.clip(idx + k, 0, n - 1)
+        far_k = (np.abs(cand32[jj] - d) > exclude_px) & (idx + k >= 0) & (idx + k < n)
+        np.minimum(c_second, np.where(far_k, win[m - 1 + k], np.inf), out=c_second)
+    return d, best, c_second
+
+
+def _streaming_wta(slices, candidates, *, exclude_px=1.0):
+    """:func:`_wta_subpixel` and the uniqueness cost over a stream of cost slices, in O(pixels) memory.
+
+    Returns ``(d, c_best, c_second)``: the sub-sample winner, its cost, and
+    the best cost among candidates more than ``exclude_px`` from ``d`` -- the
+    same values as the full volume gives. Kept per pixel: the winner's index
+    and cost, the costs of the ``m - 1`` slices either side of it, the
+    minimum over slices at least ``m`` before it and at least ``m`` after it
+    (``m`` such that those are always more than ``exclude_px`` from any
+    sub-sample position of the winner), and a ring of the last ``m`` slices.
+    """
+    m, step = _window_half(candidates, exclude_px)
+    ring = [None] * m  # ring[j % m] = slice j
+    idx = best = pre = after = win = None
+    for j, c in enumerate(slices):
+        if idx is None:
+            h, w = c.shape
+            idx = np.zeros((h, w), np.int32)
+            best = np.full((h, w), np.inf, np.float32)
+            pre = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. j - m
+            after = np.full((h, w), np.inf, np.float32)  # min of slices idx + m .. j
+            win = np.full((2 * m - 1, h, w), np.inf, np.float32)  # win[m - 1 + k] = slice idx + k
+            far_before = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. idx - m
+        if j >= m:
+            np.minimum(pre, ring[j % m], out=pre)
+        ring[j % m] = c
+        new = c < best
+        rel = j - idx
+        # pixels whose winner stays: record the slice near it, or fold it into the far minimum
+        for k in range(1, m):
+            np.copyto(win[m - 1 + k], c, where=(rel == k) & ~new)
+        np.minimum(after, np.where((rel >= m) & ~new, c, np.inf), out=after)
+        if new.any():
+            idx[new] = j
+            best[new] = c[new]
+            win[m - 1][new] = c[new]
+            for k in range(1, m):
+                win[m - 1 - k][new] = ring[(j - k) % m][new] if j - k >= 0 else np.inf
+                win[m - 1 + k][new] = np.inf
+            after[new] = np.inf
+            far_before[new] = pre[new]  # slices 0 .. j - m
+    if idx is None:
+        msg = "no cost slices"
+        raise ValueError(msg)
+    return _wta_finish(idx, best, win, np.minimum(far_before, after), candidates, step, m, exclude_px)
+
+
+def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_g, alpha, exclude_px=1.0):
+    """Winner of the aggregated cost volume over ``candidates`` and its uniqueness.
+
+    Parameters
+    ----------
+    feats : list of (intensity, column gradient) per view, float32 (h, w)
+    t : ndarray
+        View positions relative to the reference (units of the disparity).
+    ref : int
+        Reference view index.
+    candidates : ndarray, float64
+        Equally spaced constant disparities.
+    guide : ndarray, float32 (h, w)
+        Guide image of the aggregation (the reference, normalised).
+    radius, eps : int, float
+        Guided-filter box radius and ridge.
+    tau_i, tau_g, alpha : float
+        Truncations and gradient weight of the per-view cost.
+    exclude_px : float
+        Candidates farther than this from the winner count for ``c_second``.
+
+    Returns
+    -------
+    d, c_best, c_second : ndarray, float32 (h, w)
+    """
+    agg = _GuidedAggregator(guide, radius, eps)
+    if _fast.USE_NUMBA and _njit is not None:
+        return _nb_best_disparity(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha, exclude_px=exclude_px)
+    slices = _cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)
+    return _streaming_wta(slices, candidates, exclude_px=exclude_px)
+
+
+def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px):
+    """:func:`best_disparity` with the fused numba kernels (see the module docstring)."""
+    fi = np.stack([f[0] for f in feats]).astype(np.float32, copy=False)
+    fg = np.stack([f[1] for f in feats]).astype(np.float32, copy=False)
+    _, h, w = fi.shape
+    r = agg.r
+    sides = [np.asarray(ks, np.int64) for ks in _sides(t, ref)]
+    f32 = np.float32
+    a1, a2 = f32(1.0 - alpha), f32(alpha)
+    ti, tg = f32(tau_i), f32(tau_g)
+    fill = f32((1.0 - alpha) * tau_i + alpha * tau_g)
+    add_r, sub_r = _box_index(h, r)
+    add_c, sub_c = _box_index(w, r)
+    init_r = np.array([cv2.borderInterpolate(i, h, cv2.BORDER_REFLECT) for i in range(-r, r + 1)], np.int64)
+    init_c = np.array([cv2.borderInterpolate(i, w, cv2.BORDER_REFLECT) for i in range(-r, r + 1)], np.int64)
+    inv_area = 1.0 / float((2 * r + 1) ** 2)
+    n = len(candidates)
+
+    def chunks():
+        # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
+        buf = np.empty((h, w, min(_CHUNK, n)), f32)
+        p, q, a, b = (np.empty((h, w), f32) for _ in range(4))
+        colcnt = np.empty(w, f32)
+        for j0 in range(0, n, buf.shape[2]):
+            cands = candidates[j0 : j0 + buf.shape[2]]
+            for jj, dj in enumerate(cands):
+                for si, ks in enumerate(sides):
+                    shifts = np.array([float(t[k]) * float(dj) for k in ks], np.float64)
+                    _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, ti, tg, fill, agg.g, p, q, colcnt)
+                    _nb_box_coeffs(p, q, agg.mi, agg.inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b)
+                    _nb_box_finish(a, b, agg.g, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, si == 0)
+            yield buf, len(cands)
+
+    return _nb_streaming_wta(chunks(), candidates, (h, w), exclude_px=exclude_px)
+
+
+def _nb_streaming_wta(chunks, candidates, shape, *, exclude_px):
+    """:func:`_streaming_wta` over chunks ``(buf, count)``: ``buf[:, :, :count]`` holds the next ``count`` slices."""
+    m, step = _window_half(candidates, exclude_px)
+    nw = 2 * m - 1
+    idx = np.zeros(shape, np.int32)
+    # per-pixel state, interleaved (planes 300 x 4 KiB apart alias in the cache):
+    # best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
+    state = np.full((*shape, 3 + nw + m), np.inf, np.float32)
+    j0 = 0
+    for buf, count in chunks:
+        _nb_wta_chunk(buf, count, j0, m, idx, state)
+        j0 += count
+    if j0 == 0:
+        msg = "no cost slices"
+        raise ValueError(msg)
+    win = [state[:, :, 3 + k] for k in range(nw)]
+    return _wta_finish(idx, state[:, :, 0].copy(), win, state[:, :, 2], candidates, step, m, exclude_px)
+
+
+def _box_index(n, r):
+    """Source indices entering (``i + r + 1``) and leaving (``i - r``) a running box sum, reflected as cv2.BORDER_REFLECT."""
+    add = np.array([cv2.borderInterpolate(i + r + 1, n, cv2.BORDER_REFLECT) for i in range(n)], np.int64)
+    sub = np.array([cv2.borderInterpolate(i - r, n, cv2.BORDER_REFLECT) for i in range(n)], np.int64)
+    return add, sub
+
+
+if _njit is not None:
+    _jit = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
+
+    @_jit
+    def _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, tau_i, tau_g, fill, guide, p, q, colcnt):
+        """Mean truncated cost of the views ``ks`` shifted by ``shifts`` (``p``) and ``guide * p`` (``q``).
+
+        View ``k`` at column ``c`` is sampled at ``x = c - s``: with ``o =
+        floor(-s)`` and ``f = -s - o``, between columns ``c + o`` and ``c + o + 1``
+        with the same weights on the whole image (border replicated, as
+        ``cv2.warpAffine``); columns with ``x`` outside ``[0, w - 1]`` do not count.
+        """
+        _, h, w = fi.shape
+        nk = ks.size
+        lo = np.empty(nk, np.int64)
+        hi = np.empty(nk, np.int64)
+        off = np.empty(nk, np.int64)
+        frac = np.empty(nk, np.float32)
+        for c in range(w):
+            colcnt[c] = 0.0
+        for v in range(nk):
+            s = shifts[v]
+            o = math.floor(-s)
+            off[v] = o
+            frac[v] = np.float32(-s - o)
+            first = w
+            last = -1
+            for c in range(w):
+                x = np.float32(c) - np.float32(s)
+                if x >= 0 and x <= w - 1:
+                    colcnt[c] += 1.0
+                    if c < first:
+                        first = c
+                    last = c
+            lo[v] = first
+            hi[v] = last + 1
+        acc = np.empty(w, np.float32)
+        one = np.float32(1.0)
+        for r in range(h):
+            ir = fi[ref, r]
+            gr = fg[ref, r]
+            for c in range(w):
+                acc[c] = 0.0
+            for v in range(nk):
+                k = ks[v]
+                ik = fi[k, r]
+                gk = fg[k, r]
+                o = off[v]
+                f = frac[v]
+                g0 = one - f
+                for c in range(lo[v], hi[v]):
+                    i0 = min(max(c + o, 0), w - 1)
+                    i1 = min(i0 + 1, w - 1)
+                    vi = ik[i0] * g0 + ik[i1] * f
+                    vg = gk[i0] * g0 + gk[i1] * f
+                    ci = min(abs(vi - ir[c]), tau_i)
+                    cg = min(abs(vg - gr[c]), tau_g)
+                    acc[c] += a1 * ci + a2 * cg
+            gd = guide[r]
+            pr = p[r]
+            qr = q[r]
+            for c in range(w):
+                cn = colcnt[c]
+                mean = acc[c] / max(cn, one) if cn > 0 else fill
+                pr[c] = mean
+                qr[c] = gd[c] * mean
+
+    @_jit
+    def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b):
+        """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` (float64 running sums)."""
+        h, w = p.shape
+        colp = np.zeros(w, np.float64)
+        colq = np.zeros(w, np.float64)
+        for y in init_r:
+            for c in range(w):
+                colp[c] += p[y, c]
+                colq[c] += q[y, c]
+        for y in range(h):
+            sp = 0.0
+            sq = 0.0
+            for x in init_c:
+                sp += colp[x]
+                sq += colq[x]
+            mir = mi[y]
+            invr = inv[y]
+            ar = a[y]
+            br = b[y]
+            for x in range(w):
+                mp = np.float32(sp * inv_area)
+                mq = np.float32(sq * inv_area)
+                av = (mq - mir[x] * mp) * invr[x]
+                ar[x] = av
+                br[x] = mp - av * mir[x]
+                xa = add_c[x]
+                xs = sub_c[x]
+                sp += colp[xa] - colp[xs]
+                sq += colq[xa] - colq[xs]
+            ya = add_r[y]
+            ys = sub_r[y]
+            for c in range(w):
+                colp[c] += np.float64(p[ya, c]) - np.float64(p[ys, c])
+                colq[c] += np.float64(q[ya, c]) - np.float64(q[ys, c])
+
+    @_jit
+    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, first):
+        """Guided-filter output ``box(a) guide + box(b)`` (inf in columns no view covers) into ``out[:, :, plane]``, or its minimum with it."""
+        h, w = a.shape
+        cola = np.zeros(w, np.float64)
+        colb = np.zeros(w, np.float64)
+        inf = np.float32(np.inf)
+        for y in init_r:
+            for c in range(w):
+                cola[c] += a[y, c]
+                colb[c] += b[y, c]
+        for y in range(h):
+            sa = 0.0
+            sb = 0.0
+            for x in init_c:
+                sa += cola[x]
+                sb += colb[x]
+            gr = guide[y]
+            orow = out[y]
+            for x in range(w):
+                v = np.float32(sa * inv_area) * gr[x] + np.float32(sb * inv_area)
+                if colcnt[x] == 0:
+                    v = inf
+                if first or v < orow[x, plane]:
+                    orow[x, plane] = v
+                xa = add_c[x]
+                xs = sub_c[x]
+                sa += cola[xa] - cola[xs]
+                sb += colb[xa] - colb[xs]
+            ya = add_r[y]
+            ys = sub_r[y]
+            for c in range(w):
+                cola[c] += np.float64(a[ya, c]) - np.float64(a[ys, c])
+                colb[c] += np.float64(b[ya, c]) - np.float64(b[ys, c])
+
+    @_jit
+    def _nb_wta_chunk(chunk, count, j0, m, idx, state):
+        """Winner-take-all update over slices ``j0 .. j0 + count - 1`` (``chunk[:, :, :count]``), as :func:`_streaming_wta`.
+
+        ``state[r, c]`` holds the pixel's best cost, prefix minimum (slices
+        ``0 .. j - m``), far minimum, the ``2 m - 1`` costs around the winner
+        and the ring of the last ``m`` slices; it is loaded once per chunk and
+        kept in locals across it. Ring slots are tabulated per slice.
+        """
+        h, w, _ = chunk.shape
+        inf = np.float32(np.inf)
+        nw = 2 * m - 1
+        o_win = 3
+        o_ring = 3 + nw
+        # slot[jq, k] = ring slot of slice j0 + jq - k (k = 0 .. m - 1; -1 before slice 0)
+        slot = np.empty((count, m), np.int64)
+        for jq in range(count):
+            for k in range(m):
+                jj = j0 + jq - k
+                slot[jq, k] = jj % m if jj >= 0 else -1
+        for r in range(h):
+            for c in range(w):
+                st = state[r, c]
+                cv = chunk[r, c]
+                i = idx[r, c]
+                bst = st[0]
+                pr = st[1]
+                fr = st[2]
+                for jq in range(count):
+                    j = j0 + jq
+                    cost = cv[jq]
+                    s0 = o_ring + slot[jq, 0]
+                    if j >= m:
+                        old = st[s0]  # slice j - m
+                        if old < pr:
+                            pr = old
+                    st[s0] = cost
+                    if cost < bst:
+                        i = j
+                        bst = cost
+                        st[o_win + m - 1] = cost
+                        for k in range(1, m):
+                            sk = slot[jq, k]
+                            st[o_win + m - 1 - k] = st[o_ring + sk] if sk >= 0 else inf
+                            st[o_win + m - 1 + k] = inf
+                        fr = pr
+                    else:
+                        rel = j - i
+                        if rel >= m:
+                            if cost < fr:
+                                fr = cost
+                        elif rel >= 1:
+                            st[o_win + m - 1 + rel] = cost
+                idx[r, c] = i
+                st[0] = bst
+                st[1] = pr
+                st[2] = fr
