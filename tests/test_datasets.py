@@ -216,7 +216,8 @@ def test_no_root_anywhere(tmp_path, monkeypatch):
     monkeypatch.delenv("NFDEPTH_DATA", raising=False)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(D, "_repo_candidate", lambda: None)
-    with pytest.raises(DataNotFoundError, match=r"tried NFDEPTH_DATA \(not set\).*shared.data"):
+    monkeypatch.setattr(D, "_download_candidate", lambda: None)  # no `nfdepth fetch-data` folder either
+    with pytest.raises(DataNotFoundError, match=r"tried NFDEPTH_DATA \(not set\).*shared.data.*fetch-data"):
         D.data_root()
 
 

@@ -35,10 +35,11 @@ COMMANDS = {
     "evaluate": ["evaluate_scene", "evaluate_dataset", "disparity_errors", "sgbm_disparity", "waxman_sinha_disparity"],
     "view": ["read_image", "write_colormap_png", "plot.colormap_panel"],
     "bench": ["bench.bench_main"],
+    "fetch-data": ["fetch_data", "default_data_dir", "fetch.data_files"],
 }
 
 #: Modules of the command line itself (their helpers are CLI glue, not library).
-CLI_MODULES = ("cli", "_cli_rig", "_cli_evaluate")
+CLI_MODULES = ("cli", "_cli_rig", "_cli_evaluate", "_cli_fetch")
 
 #: Library names a command imports that are not (yet) in their module's __all__.
 #: Each entry is a known gap, to be removed once the module exports the name.

@@ -42,14 +42,20 @@ command                     functions
                             waxman_sinha_disparity
 ``nfdepth reproduce``,      run_paper_experiment
 ``nfdepth demo``
+``nfdepth fetch-data``      fetch_data (needs ``pooch``: ``pip install
+                            'nfdepth[data]'``), default_data_dir,
+                            DataDownloadError
 ==========================  ================================================
 
 Rig files: Rig, RigError, load_rig (``docs/rig-format.md``).
 
+Real data sets: fetch_data downloads them (checked by SHA-256) into
+default_data_dir, where ``datasets.data_root`` finds them.
+
 Sub-modules with more: ``rig``, ``video``, ``evaluate``, ``baselines``,
 ``experiments``, ``synthetic`` (scenes), ``datasets`` (real data sets),
-``plot`` (figures), ``fast`` (fused fast path, streaming), ``bench``
-(benchmarks).
+``fetch`` (downloading them), ``plot`` (figures), ``fast`` (fused fast path,
+streaming), ``bench`` (benchmarks).
 """
 
 from typing import TYPE_CHECKING
@@ -101,12 +107,16 @@ _LAZY = {
     "sgbm_disparity": "baselines",
     "waxman_sinha_disparity": "baselines",
     "run_paper_experiment": "experiments",
+    "fetch_data": "fetch",
+    "default_data_dir": "fetch",
+    "DataDownloadError": "fetch",
 }
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .baselines import sgbm_disparity, waxman_sinha_disparity
     from .evaluate import disparity_errors, evaluate_dataset, evaluate_scene
     from .experiments import run_paper_experiment
+    from .fetch import DataDownloadError, default_data_dir, fetch_data
     from .rig import Rig, RigError, dynamic_stereo_from_rig, edge_depth_maps, load_rig, stereo_options_from_rig
     from .video import (
         CrossingDepth,

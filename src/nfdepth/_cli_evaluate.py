@@ -32,7 +32,7 @@ def register(sub, CLIError) -> None:
         metavar="DATASET",
         help="a scene (tsukuba, teddy, middlebury2005/Art, motorcycle), a group (middlebury2005, all) or a data folder",
     )
-    p.add_argument("--data", metavar="DIR", help="the data folder (default: NFDEPTH_DATA or ../shared/data)")
+    p.add_argument("--data", metavar="DIR", help="the data folder (default: NFDEPTH_DATA, ../shared/data or the fetch-data folder)")
     p.add_argument("--views", default="all", metavar="three|all", help="views to use: all (default) or three around the reference")
     p.add_argument("--methods", nargs="+", choices=METHODS, default=list(DEFAULT_METHODS), metavar="M",
                    help=f"methods (default: {' '.join(DEFAULT_METHODS)}; choices: {', '.join(METHODS)})")

@@ -11,7 +11,7 @@ code  meaning
 2     bad argument or bad input value
 3     an input file could not be read
 4     an output could not be written, or exists (use ``--force``)
-5     data set not found
+5     data set not found, or its download failed (``fetch-data``)
 130   interrupted (Ctrl-C, SIGINT); no partial output is left behind
 143   terminated (SIGTERM); no partial output is left behind
 ====  ==========================================================
@@ -46,7 +46,7 @@ EXIT_TERMINATED = 143
 #: adding its parser with ``set_defaults(func=...)``; ``func(args)`` returns
 #: an exit code and raises ``CLIError(message, code)`` or the library's own
 #: errors, which :func:`main` turns into one line on stderr.
-_PLUGIN_COMMANDS: tuple[str, ...] = ("_cli_evaluate", "_cli_rig")
+_PLUGIN_COMMANDS: tuple[str, ...] = ("_cli_evaluate", "_cli_rig", "_cli_fetch")
 
 
 class CLIError(Exception):

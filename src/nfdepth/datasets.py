@@ -9,7 +9,8 @@ ground-truth **neighbour-step** disparity ``d`` at that view, in pixels: pixel
 ``Z = f b / (d + offset)``.
 
 The data live outside the package; :func:`data_root` finds them (argument,
-``NFDEPTH_DATA``, ``../shared/data``). Sets and their ``SOURCE.md``:
+``NFDEPTH_DATA``, ``../shared/data``, the folder that ``nfdepth fetch-data``
+downloads into: :func:`nfdepth.fetch.fetch_data`). Sets and their ``SOURCE.md``:
 
 =====================  ===================  ==========  ======================
 name                   views (reference)    disparity   depth
@@ -33,6 +34,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from . import fetch as _fetch
 from ._validate import NFDepthError
 from .io import ImageReadError, read_image
 
@@ -83,13 +85,31 @@ def _repo_candidate() -> Path | None:
     return None
 
 
+def _download_candidate() -> Path | None:
+    """The default download folder of ``nfdepth fetch-data`` if it holds at least one complete set.
+
+    A set counts once its ``SHA256SUMS`` is written (after all its files
+    matched their hashes). Tests replace this function (or
+    :func:`nfdepth.fetch.default_data_dir`) to stay hermetic.
+    """
+    try:
+        folder = _fetch.default_data_dir()
+    except (OSError, RuntimeError):  # no home directory
+        return None
+    if any((folder / name / "SHA256SUMS").is_file() for name in _fetch.DATA_SETS):
+        return folder
+    return None
+
+
 def data_root(path=None) -> Path:
     """Find the folder holding the real data sets.
 
     Tried in order: ``path`` if given (only it); else the environment
     variable ``NFDEPTH_DATA`` if set (only it); else ``../shared/data``
     relative to the current working directory; else a ``shared/data`` folder
-    beside one of the folders above this file (the repository's sibling).
+    beside one of the folders above this file (the repository's sibling);
+    else the default download folder of ``nfdepth fetch-data``
+    (:func:`nfdepth.fetch.default_data_dir`) if it holds at least one set.
 
     Parameters
     ----------
@@ -104,9 +124,10 @@ def data_root(path=None) -> Path:
     Raises
     ------
     DataNotFoundError
-        Naming every place tried and how to set ``NFDEPTH_DATA``.
+        Naming every place tried, how to set ``NFDEPTH_DATA`` and how to
+        download the data (``nfdepth fetch-data``).
     """
-    hint = f"set {ENV_VAR}=/path/to/shared/data or pass root=..."
+    hint = f"set {ENV_VAR}=/path/to/shared/data or pass root=..., or download the data with `nfdepth fetch-data`"
     if path is not None:
         p = Path(path).expanduser()
         if p.is_dir():
@@ -117,7 +138,7 @@ def data_root(path=None) -> Path:
         p = Path(env).expanduser()
         if p.is_dir():
             return p.resolve()
-        raise DataNotFoundError(f"data folder not found: {ENV_VAR}={env!r} is not a directory; point {ENV_VAR} at the shared/data folder")
+        raise DataNotFoundError(f"data folder not found: {ENV_VAR}={env!r} is not a directory; point {ENV_VAR} at the shared/data folder (or at a folder filled by `nfdepth fetch-data --dest DIR`)")
     tried = []
     cwd_cand = Path.cwd() / ".." / "shared" / "data"
     tried.append(str(cwd_cand.resolve()))
@@ -127,6 +148,13 @@ def data_root(path=None) -> Path:
     if repo is not None:
         return repo.resolve()
     tried.append(f"a shared/data folder beside any parent of {Path(__file__).resolve().parent}")
+    downloaded = _download_candidate()
+    if downloaded is not None:
+        return downloaded.resolve()
+    try:
+        tried.append(f"the download folder {_fetch.default_data_dir()} (no data set there)")
+    except (OSError, RuntimeError):
+        tried.append("the download folder (no home directory)")
     raise DataNotFoundError(f"data folder not found; tried {ENV_VAR} (not set), " + ", ".join(tried) + f"; {hint}")
 
 
