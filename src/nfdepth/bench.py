@@ -10,8 +10,9 @@ Cases (per image size and scene):
 ``nf_edges``            :func:`nfdepth.fast.normal_flow_edges` on a triple
 ``nf_edges_reference``  the plain reference (``normal_flow`` + ``select_edge_points``)
 ``nf_stream_frame``     :class:`nfdepth.fast.StreamingNormalFlow`, cost per pushed frame
-``nf_static_stereo``    ``nfdepth.stereo.static_stereo`` on three views (skipped if
-                        the module is missing or the call fails)
+``nf_static_stereo``    ``nfdepth.stereo.static_stereo`` on three views, dense (skipped
+                        if the call fails)
+``nf_static_stereo_edges`` the same with ``edges_only=True`` (the paper's sparse output)
 ``cv_sgbm``             ``cv2.StereoSGBM`` (64 disparities, block 5) on a uint8 pair
 ``cv_bm``               ``cv2.StereoBM`` (64 disparities, block 15) on a uint8 pair
 ``cv_dis_fast/medium``  ``cv2.DISOpticalFlow`` presets on a uint8 pair
@@ -141,12 +142,14 @@ def _cases(frames, *, include_reference: bool, include_stereo: bool = True):
 
     if not include_stereo:
         cases["nf_static_stereo"] = "skipped: quick mode runs it at the smallest size only"
+        cases["nf_static_stereo_edges"] = cases["nf_static_stereo"]
     else:
         try:
-            from .stereo import static_stereo  # written in parallel; may not exist yet
+            from .stereo import static_stereo
 
             static_stereo(f32, reference=1)  # probe once (also warms up)
             cases["nf_static_stereo"] = lambda: static_stereo(f32, reference=1)
+            cases["nf_static_stereo_edges"] = lambda: static_stereo(f32, reference=1, edges_only=True)
         except Exception as exc:  # noqa: BLE001 - any failure means "skip this case"
             cases["nf_static_stereo"] = f"skipped: {type(exc).__name__}: {exc}"[:200]
 
