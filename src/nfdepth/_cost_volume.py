@@ -380,22 +380,48 @@ if _njit is not None:
                 pr[c] = mean
                 qr[c] = gd[c] * mean
 
+    # Two box filters at once as running sums (float64, cv2.boxFilter's accumulator):
+    # column sums over the rows of the window, then a running sum along each row.
+    _jit_inline = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
+
+    @_jit_inline
+    def _nb_columns_init(a, b, rows, col_a, col_b):
+        """Column sums of ``a`` and ``b`` over the (reflected) ``rows`` of the first window."""
+        w = a.shape[1]
+        for c in range(w):
+            col_a[c] = 0.0
+            col_b[c] = 0.0
+        for y in rows:
+            for c in range(w):
+                col_a[c] += a[y, c]
+                col_b[c] += b[y, c]
+
+    @_jit_inline
+    def _nb_columns_step(a, b, y_add, y_sub, col_a, col_b):
+        """Slide the column sums one row down: add row ``y_add``, drop row ``y_sub``."""
+        for c in range(a.shape[1]):
+            col_a[c] += np.float64(a[y_add, c]) - np.float64(a[y_sub, c])
+            col_b[c] += np.float64(b[y_add, c]) - np.float64(b[y_sub, c])
+
+    @_jit_inline
+    def _nb_row_start(col_a, col_b, cols):
+        """Box sums of the first window of a row from the column sums."""
+        sa = 0.0
+        sb = 0.0
+        for x in cols:
+            sa += col_a[x]
+            sb += col_b[x]
+        return sa, sb
+
     @_jit
     def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b):
         """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` (float64 running sums)."""
         h, w = p.shape
-        colp = np.zeros(w, np.float64)
-        colq = np.zeros(w, np.float64)
-        for y in init_r:
-            for c in range(w):
-                colp[c] += p[y, c]
-                colq[c] += q[y, c]
+        colp = np.empty(w, np.float64)
+        colq = np.empty(w, np.float64)
+        _nb_columns_init(p, q, init_r, colp, colq)
         for y in range(h):
-            sp = 0.0
-            sq = 0.0
-            for x in init_c:
-                sp += colp[x]
-                sq += colq[x]
+            sp, sq = _nb_row_start(colp, colq, init_c)
             mir = mi[y]
             invr = inv[y]
             ar = a[y]
@@ -406,33 +432,20 @@ if _njit is not None:
                 av = (mq - mir[x] * mp) * invr[x]
                 ar[x] = av
                 br[x] = mp - av * mir[x]
-                xa = add_c[x]
-                xs = sub_c[x]
-                sp += colp[xa] - colp[xs]
-                sq += colq[xa] - colq[xs]
-            ya = add_r[y]
-            ys = sub_r[y]
-            for c in range(w):
-                colp[c] += np.float64(p[ya, c]) - np.float64(p[ys, c])
-                colq[c] += np.float64(q[ya, c]) - np.float64(q[ys, c])
+                sp += colp[add_c[x]] - colp[sub_c[x]]
+                sq += colq[add_c[x]] - colq[sub_c[x]]
+            _nb_columns_step(p, q, add_r[y], sub_r[y], colp, colq)
 
     @_jit
     def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, first):
         """Guided-filter output ``box(a) guide + box(b)`` (inf in columns no view covers) into ``out[:, :, plane]``, or its minimum with it."""
         h, w = a.shape
-        cola = np.zeros(w, np.float64)
-        colb = np.zeros(w, np.float64)
+        cola = np.empty(w, np.float64)
+        colb = np.empty(w, np.float64)
         inf = np.float32(np.inf)
-        for y in init_r:
-            for c in range(w):
-                cola[c] += a[y, c]
-                colb[c] += b[y, c]
+        _nb_columns_init(a, b, init_r, cola, colb)
         for y in range(h):
-            sa = 0.0
-            sb = 0.0
-            for x in init_c:
-                sa += cola[x]
-                sb += colb[x]
+            sa, sb = _nb_row_start(cola, colb, init_c)
             gr = guide[y]
             orow = out[y]
             for x in range(w):
@@ -441,15 +454,9 @@ if _njit is not None:
                     v = inf
                 if first or v < orow[x, plane]:
                     orow[x, plane] = v
-                xa = add_c[x]
-                xs = sub_c[x]
-                sa += cola[xa] - cola[xs]
-                sb += colb[xa] - colb[xs]
-            ya = add_r[y]
-            ys = sub_r[y]
-            for c in range(w):
-                cola[c] += np.float64(a[ya, c]) - np.float64(a[ys, c])
-                colb[c] += np.float64(b[ya, c]) - np.float64(b[ys, c])
+                sa += cola[add_c[x]] - cola[sub_c[x]]
+                sb += colb[add_c[x]] - colb[sub_c[x]]
+            _nb_columns_step(a, b, add_r[y], sub_r[y], cola, colb)
 
     @_jit
     def _nb_wta_chunk(chunk, count, j0, m, idx, state):
