@@ -120,11 +120,6 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
         yield best
 
 
-def _cost_volume(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
-    """The whole ``(len(candidates), h, w)`` volume of :func:`_cost_slices` (small inputs and tests)."""
-    return np.stack(list(_cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)))
-
-
 def _wta_subpixel(vol, candidates):
     """Winner-take-all over the cost volume with a sub-sample (equiangular) fit over its neighbours."""
     idx = np.argmin(vol, axis=0)

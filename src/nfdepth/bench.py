@@ -152,6 +152,7 @@ def _cases(frames, *, include_reference: bool, include_stereo: bool = True):
             cases["nf_static_stereo_edges"] = lambda: static_stereo(f32, reference=1, edges_only=True)
         except Exception as exc:  # noqa: BLE001 - any failure means "skip this case"
             cases["nf_static_stereo"] = f"skipped: {type(exc).__name__}: {exc}"[:200]
+            cases["nf_static_stereo_edges"] = cases["nf_static_stereo"]
 
     sgbm = cv2.StereoSGBM_create(minDisparity=0, numDisparities=64, blockSize=5)
     bm = cv2.StereoBM_create(numDisparities=64, blockSize=15)

@@ -130,7 +130,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._cost_volume import _match_features, best_disparity
+from ._cost_volume import _box, _match_features, best_disparity
 from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
@@ -252,10 +252,6 @@ def _noise_correlation_area(sigma_px: float) -> float:
 def _blur(a: np.ndarray, sigma: float) -> np.ndarray:
     radius = max(1, int(np.ceil(3.0 * sigma)))
     return cv2.GaussianBlur(a, (2 * radius + 1, 2 * radius + 1), sigma, borderType=cv2.BORDER_REFLECT)
-
-
-def _box(a: np.ndarray, radius: int) -> np.ndarray:
-    return cv2.boxFilter(a, -1, (2 * radius + 1, 2 * radius + 1), normalize=True, borderType=cv2.BORDER_REFLECT)
 
 
 def _weighted_guided(guide, w, wp, radius, eps):
