@@ -83,8 +83,9 @@ def test_fast_matches_reference(stencil, sigma_px):
     assert vn is result.vn and mask is result.mask
 
 
-def test_fast_matches_reference_options():
-    frames = _sequence((70, 90), shift=(-0.4, 0.9), seed=3)
+@pytest.mark.parametrize("shape", [(70, 90), (71, 91), (70, 91)])  # cell grids odd, even, mixed: block-grid borders
+def test_fast_matches_reference_options(shape):
+    frames = _sequence(shape, shift=(-0.4, 0.9), seed=3)
     opts = {"min_gradient": 5.0, "max_corner_ratio": 0.3, "corner_window_px": 1.5, "border_px": 4}
     g, sel = _reference(frames, sigma_px=1.5, **opts)
     result = normal_flow_edges(frames, sigma_px=1.5, **opts)

@@ -12,13 +12,15 @@ gradients of :mod:`nfdepth.normal_flow`:
   by default a fraction of a high percentile of the image's gradient);
 * a cell is a *corner* when the eigenvalue ratio ``lambda_2 / lambda_1`` of
   the structure tensor (gradient outer products averaged with a Gaussian
-  window) exceeds ``max_corner_ratio``: along a straight edge the ratio is
+  window, built on the 2 x 2 block grid and read back bilinearly) exceeds
+  ``max_corner_ratio``: along a straight edge the ratio is
   near 0, where two edge directions meet it grows toward 1. The rule needs
   no ground truth.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -30,6 +32,7 @@ from .normal_flow import GradientField
 __all__ = [
     "EdgeSelection",
     "laplacian_zero_crossings",
+    "block_structure_tensor",
     "corner_ratio",
     "select_edge_points",
 ]
@@ -60,20 +63,86 @@ def laplacian_zero_crossings(smoothed: np.ndarray) -> np.ndarray:
     return (corners.max(axis=0) > 0) & (corners.min(axis=0) < 0)
 
 
+def _corner_window_blocks(window_sigma_px: float) -> tuple[float, int]:
+    """Gaussian of the block-grid structure tensor: ``(sigma, radius)`` in blocks.
+
+    Variances add: the 2 x 2 block mean contributes 1/4 px^2 per axis and the
+    bilinear read-back at a cell (weights 3/4, 1/4 at 2 px spacing) 3/4 px^2,
+    so the block grid's Gaussian gets ``sqrt(window^2 - 1) / 2`` blocks and
+    the whole window has the requested variance. Windows of 1 px or less
+    get a minimal 0.1-block Gaussian: effectively a 1 px window.
+    """
+    window_sigma_px = check_positive_finite("window_sigma_px", window_sigma_px)
+    sigma = max(math.sqrt(max(window_sigma_px**2 - 1.0, 0.0)) / 2.0, 0.1)
+    return sigma, max(1, int(math.ceil(3.0 * sigma)))
+
+
+def block_structure_tensor(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px: float) -> np.ndarray:
+    """Structure tensor ``(J_cc, J_rr, J_cr)`` on the 2 x 2 block grid, shape (3, ceil(h/2), ceil(w/2)).
+
+    Gradient outer products averaged over 2 x 2 blocks of cells (an odd last
+    row or column is replicated), then smoothed with the Gaussian of
+    :func:`_corner_window_blocks` (reflected border). Block ``[i, j]`` is
+    centred on cell position ``(2i + 0.5, 2j + 0.5)``.
+    """
+    sigma, radius = _corner_window_blocks(window_sigma_px)
+    gc = np.asarray(grad_col, dtype=np.float64)
+    gr = np.asarray(grad_row, dtype=np.float64)
+    if gc.shape != gr.shape or gc.ndim != 2 or gc.size == 0:
+        msg = f"grad_col and grad_row must be non-empty 2-D arrays of one shape, got {gc.shape} and {gr.shape}"
+        raise ValueError(msg)
+    h, w = gc.shape
+    ksize = (2 * radius + 1, 2 * radius + 1)
+    out = np.empty((3, (h + 1) // 2, (w + 1) // 2))
+    for dst, (u, v) in zip(out, ((gc, gc), (gr, gr), (gc, gr))):
+        prod = cv2.copyMakeBorder(u * v, 0, h % 2, 0, w % 2, cv2.BORDER_REPLICATE)
+        block = 0.25 * (((prod[0::2, 0::2] + prod[0::2, 1::2]) + prod[1::2, 0::2]) + prod[1::2, 1::2])
+        cv2.GaussianBlur(block, ksize, sigma, dst=dst, borderType=cv2.BORDER_REFLECT)
+    return out
+
+
+def _block_read_back(n: int, blocks: int):
+    """Bilinear weights from the block grid back to ``n`` cells along one axis.
+
+    Cell ``y`` sits at block coordinate ``(y - 0.5) / 2``: between blocks
+    ``lo = (y - 1) // 2`` and ``lo + 1``, with weight 3/4 on the nearer one;
+    indices are clamped to the grid (replicated border).
+    """
+    y = np.arange(n)
+    lo = (y - 1) // 2
+    w_hi = np.where(y % 2 == 0, 0.75, 0.25)
+    return np.clip(lo, 0, blocks - 1), np.clip(lo + 1, 0, blocks - 1), 1.0 - w_hi, w_hi
+
+
+def _read_back(tensor: np.ndarray, shape) -> np.ndarray:
+    """The block tensor (3, hb, wb) read back at every cell of ``shape``: the
+    bilinear weights of :func:`_block_read_back` on both axes.
+
+    ``cv2.resize`` (``INTER_LINEAR``, exact 2x) maps cell ``y`` to ``y / 2 -
+    1/4`` blocks with replicated edges: the same weights (3/4, 1/4), in its
+    own summation order (within 1e-15 relative of the separable formula,
+    tests/test_edges.py).
+    """
+    h, w = shape
+    hb, wb = tensor.shape[1:]
+    up = cv2.resize(cv2.merge(list(tensor)), (2 * wb, 2 * hb), interpolation=cv2.INTER_LINEAR)
+    return np.moveaxis(up[:h, :w], 2, 0)
+
+
 def corner_ratio(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px: float) -> np.ndarray:
-    """Structure-tensor eigenvalue ratio ``lambda_2 / lambda_1`` in [0, 1].
+    """Structure-tensor eigenvalue ratio ``lambda_2 / lambda_1`` in [0, 1] at every cell.
 
     0 on a straight edge (one gradient direction in the window), near 1 at
     corners and junctions, NaN where the window holds no gradient at all.
+    The tensor is :func:`block_structure_tensor` read back at each cell by
+    bilinear interpolation: a window of ``window_sigma_px`` (variance
+    matched) at a quarter of a full-grid Gaussian's samples, so that the
+    fast path's share of it costs a fraction of one smoothing pass. At edge
+    points its ratio is within ~0.005 (90th percentile) of a full-grid
+    Gaussian window's for windows of 2 px or more, ~0.014 at 1-1.5 px
+    (tests/test_edges.py).
     """
-    window_sigma_px = check_positive_finite("window_sigma_px", window_sigma_px)
-    radius = max(1, int(np.ceil(3.0 * window_sigma_px)))
-    ksize = (2 * radius + 1, 2 * radius + 1)
-    gc = np.asarray(grad_col, dtype=np.float64)
-    gr = np.asarray(grad_row, dtype=np.float64)
-    jxx = cv2.GaussianBlur(gc * gc, ksize, window_sigma_px, borderType=cv2.BORDER_REFLECT)
-    jyy = cv2.GaussianBlur(gr * gr, ksize, window_sigma_px, borderType=cv2.BORDER_REFLECT)
-    jxy = cv2.GaussianBlur(gc * gr, ksize, window_sigma_px, borderType=cv2.BORDER_REFLECT)
+    jxx, jyy, jxy = _read_back(block_structure_tensor(grad_col, grad_row, window_sigma_px=window_sigma_px), np.shape(grad_col))
     half_trace = 0.5 * (jxx + jyy)
     root = np.sqrt(np.maximum(0.25 * (jxx - jyy) ** 2 + jxy**2, 0.0))
     lam1 = half_trace + root

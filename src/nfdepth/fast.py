@@ -19,7 +19,8 @@ with far fewer passes over the image:
   a 2 x 4 kernel; ``BORDER_REPLICATE`` reproduces the reference's edge
   padding exactly.
 * **No per-call allocations.** Intermediates live in a per-thread
-  workspace keyed by image size (6 float32 + 3 bool images, 27 B/px). The
+  workspace keyed by image size (6 float32 + 3 bool images and the block
+  tensor, 30 B/px). The
   four outputs come from a pool of two sets that is recycled once the
   caller holds no reference to a set (checked with CPython reference
   counts against a private sentinel), so results that are kept are never
@@ -28,10 +29,12 @@ with far fewer passes over the image:
   re-allocating ~1.2 MB per output per call cost ~1300 faults (several ms)
   per 640 x 480 triple. The sparse work runs in bands of rows for the same
   reason (small temporaries).
-* **Sparse corner test.** The structure tensor is smoothed on the full grid
-  (three Gaussian passes, the reference's window, so masks stay identical);
-  its eigenvalue ratio is evaluated only at the candidate cells (strong zero
-  crossings inside the border), in float64.
+* **Sparse corner test.** The structure tensor is the reference's block-grid
+  one (:func:`nfdepth.edges.block_structure_tensor`: 2 x 2 block means of
+  the gradient products, one 3-channel Gaussian pass over a quarter of the
+  cells); it is read back bilinearly and its eigenvalue ratio evaluated only
+  at the candidate cells (strong zero crossings inside the border), in
+  float64.
 * **Angle.** ``alpha`` is computed (float64 ``atan2``; float32 on the numba
   path) only at the edge points (numba path) or candidate edge points
   (fallback), where it is used; it is NaN elsewhere. A full-grid angle costs
@@ -44,11 +47,12 @@ single-threaded loops (``fastmath=False``: bit-identical across runs, buffers
 and thread counts): one pass over the cell grid (combined stencils, ``I_t``,
 ``|grad I|``, ``vn``, Laplacian signs in cv2's own summation order, the list
 of zero-crossing cells), then, after the percentile (exact, as
-``np.percentile``), one pass over the rows holding strong candidates:
-structure tensor (float32 separable window, reflected borders as cv2's)
-evaluated only there, the eigenvalue test (float64, branch-free) at the
-candidates and float32 ``atan2`` at the accepted edge points only (it costs
-~25 ns a call). The percentile's top values are collected by a compiled loop. It blurs the three frames separately (3 Gaussian passes), so
+``np.percentile``), the block tensor (a compiled pass for the block means,
+``cv2.sepFilter2D`` for the window) and one pass over the candidates: strong
+test, bilinear read-back, eigenvalue test (float64, branch-free), with the
+accepted points' gradients packed for NumPy's SIMD float32 ``atan2`` (the
+reference's own; a scalar call costs ~25 ns a point). The percentile's top
+values are collected by a compiled loop. It blurs the three frames separately (3 Gaussian passes), so
 :class:`StreamingNormalFlow` keeps only the smoothed frames and a new frame
 costs one Gaussian pass plus the fused work; streamed and from-scratch
 results are bit-identical. Without numba the numpy/OpenCV path below runs
@@ -67,7 +71,7 @@ NaN off the candidate edge points, see above):
 
 * sums are taken in a different order (weighted sum before smoothing), so
   gradients agree to ~1e-6 of their scale, not bit for bit;
-* the structure tensor is smoothed in float32 (the reference uses float64),
+* the block structure tensor is built in float32 (the reference uses float64),
   so a cell whose corner ratio equals ``max_corner_ratio`` to ~1e-6 can fall
   on the other side; likewise a gradient magnitude equal to the threshold to
   one ulp. These threshold ties are the only way the masks can differ.
@@ -86,6 +90,7 @@ import cv2
 import numpy as np
 
 from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite
+from .edges import _block_read_back, _corner_window_blocks
 from .normal_flow import _TEMPORAL_WEIGHTS, STENCILS
 
 try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
@@ -220,8 +225,17 @@ class _Pool:
         return item[:4]
 
 
+class _TensorBuffers:
+    """Block-grid structure tensor ((hb, wb, 3) float32, smoothed in place: 3 B/px) and its read-back tables."""
+
+    def __init__(self, h, w):
+        hb, wb = (h + 1) // 2, (w + 1) // 2
+        self.tensor = np.empty((hb, wb, 3), np.float32)
+        self.read_back = _block_read_back(h, hb) + _block_read_back(w, wb)
+
+
 class _Workspace(_Pool):
-    """Reusable buffers of the numpy/OpenCV path (one size, one thread): 6 float32 + 3 bool images, 27 B/px."""
+    """Reusable buffers of the numpy/OpenCV path (one size, one thread): 6 float32 + 3 bool images + block tensor, 30 B/px."""
 
     def __init__(self, shape):
         super().__init__(shape)
@@ -237,10 +251,12 @@ class _Workspace(_Pool):
         self.b1 = np.empty((H, W), bool)
         self.b2 = np.empty((H, W), bool)
         self.b3 = np.empty((h, w), bool)
+        tb = _TensorBuffers(h, w)
+        self.tensor, self.read_back = tb.tensor, tb.read_back
 
 
 class _NbWorkspace(_Pool):
-    """Reusable buffers of the numba path: 3 smoothed frames (from scratch only), I_col, I_row, candidate list (24 or 12 B/px)."""
+    """Reusable buffers of the numba path: 3 smoothed frames (from scratch only), I_col, I_row, candidate list, block tensor (27 or 15 B/px)."""
 
     def __init__(self, shape, frames=True):
         super().__init__(shape)
@@ -251,6 +267,8 @@ class _NbWorkspace(_Pool):
         self.gc = np.empty((h, w), np.float32)
         self.gr = np.empty((h, w), np.float32)
         self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
+        tb = _TensorBuffers(h, w)
+        self.tensor, self.read_back = tb.tensor, tb.read_back
 
 
 _local = threading.local()
@@ -294,28 +312,14 @@ class _Kernels:
         self.k_col = k_col.astype(np.float32)
         self.k_row = np.ascontiguousarray(k_col.T).astype(np.float32)
         self.box = np.full((2, 2), 0.25, np.float32)
-        self.tg = _gauss_kernel(p.corner_window_px, 3.0).astype(np.float32)
+        sigma_b, radius_b = _corner_window_blocks(p.corner_window_px)
+        self.tb = cv2.getGaussianKernel(2 * radius_b + 1, sigma_b, cv2.CV_64F).astype(np.float32)
         # numba path: float32 constants, as the reference's float32 arithmetic uses them
         f32 = np.float32
         self.nb_weights = tuple(f32(x) for x in w)
         self.kc1, self.kc2 = f32(0.75), f32(1.0 / 12.0)
         self.matched = p.stencil == "matched"
         self.tdiv = f32(2.0 * p.frame_interval)
-        self._maps: dict = {}
-
-    def border_maps(self, h, w):
-        """Index maps (cv2 BORDER_REFLECT) of the structure-tensor window's padded rows and columns."""
-        key = (h, w)
-        m = self._maps.get(key)
-        if m is None:
-            R = (self.tg.size - 1) // 2
-            m = tuple(
-                np.array([cv2.borderInterpolate(i - R, n, cv2.BORDER_REFLECT) for i in range(n + 2 * R)], np.int64) for n in (h, w)
-            )
-            if len(self._maps) > 8:
-                self._maps.clear()
-            self._maps[key] = m
-        return m
 
 
 _kernel_cache: dict = {}
@@ -554,99 +558,78 @@ if _njit is not None:
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_select(gc, gr, mag, cand, ncand, thr, tg, rmap, cmap, max_ratio, alpha, mask):
-        """Strong test, angle and corner test at the zero-crossing cells ``cand[:ncand]``.
+    def _nb_block_tensor(gc, gr, T):
+        """Gradient outer products averaged over 2 x 2 blocks of cells into ``T`` (hb, wb, 3).
 
-        The structure tensor (products smoothed with the separable window ``tg``,
-        reflected border via the index maps ``rmap``/``cmap``) is evaluated at
-        the strong candidates only: vertical sums for rows that hold one, then
-        the horizontal sum at each candidate. Returns the number of edge points.
+        An odd last row or column of cells is replicated, and the four
+        products are summed in the reference's order
+        (:func:`nfdepth.edges.block_structure_tensor`).
         """
         h, w = gc.shape
-        K = tg.size
-        R = (K - 1) // 2
-        # products of the padded rows, ring of K
-        P = np.empty((K, 3, w), np.float32)
-        V = np.empty((3, w + 2 * R), np.float32)
-        J = np.empty((3, w), np.float32)
-        have = -1  # highest padded row whose products are in the ring
-        i = 0
+        hb, wb = T.shape[0], T.shape[1]
+        for i in range(hb):
+            r0 = 2 * i
+            r1 = min(r0 + 1, h - 1)
+            a0, a1, b0, b1 = gc[r0], gc[r1], gr[r0], gr[r1]
+            t = T[i]
+            for j in range(wb):
+                c0 = 2 * j
+                c1 = min(c0 + 1, w - 1)
+                x00, x01, x10, x11 = a0[c0], a0[c1], a1[c0], a1[c1]
+                y00, y01, y10, y11 = b0[c0], b0[c1], b1[c0], b1[c1]
+                t[j, 0] = np.float32(0.25) * (((x00 * x00 + x01 * x01) + x10 * x10) + x11 * x11)
+                t[j, 1] = np.float32(0.25) * (((y00 * y00 + y01 * y01) + y10 * y10) + y11 * y11)
+                t[j, 2] = np.float32(0.25) * (((x00 * y00 + x01 * y01) + x10 * y10) + x11 * y11)
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
+    def _nb_select(gc, gr, mag, cand, ncand, thr, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask):
+        """Strong test, corner test and angle at the zero-crossing cells ``cand[:ncand]``.
+
+        The smoothed block tensor ``T`` (hb, wb, 3) is read back bilinearly at
+        each strong candidate with the tables of
+        :func:`nfdepth.edges._block_read_back` (rows first, as the reference),
+        and its eigenvalue ratio is tested in float64. Returns the number of
+        edge points.
+        """
+        w = gc.shape[1]
         count = 0
-        while i < ncand:
-            r = cand[i] // w
-            j = i
-            while j < ncand and cand[j] // w == r:
-                j += 1
-            # strong candidates of row r
-            nstrong = 0
-            for q in range(i, j):
-                c = cand[q] - r * w
-                m = mag[r, c]
-                if m >= thr and m > 0:
-                    cand[i + nstrong] = c
-                    nstrong += 1
-            if nstrong:
-                # products of padded rows r .. r + 2R (source rows rmap[.])
-                lo = max(have + 1, r)
-                for p in range(lo, r + 2 * R + 1):
-                    src = rmap[p]
-                    slot = P[p % K]
-                    a = gc[src]
-                    bb = gr[src]
-                    for c in range(w):
-                        slot[0, c] = a[c] * a[c]
-                        slot[1, c] = bb[c] * bb[c]
-                        slot[2, c] = a[c] * bb[c]
-                have = r + 2 * R
-                # vertical sums (symmetric window) into V[:, R:R+w]
-                for ch in range(3):
-                    # (offset views, not offset indices: provably non-negative indices let LLVM vectorise)
-                    out = V[ch]
-                    oc = out[R : R + w]
-                    mid = P[(r + R) % K, ch]
-                    k0 = tg[R]
-                    for c in range(w):
-                        oc[c] = k0 * mid[c]
-                    for k in range(1, R + 1):
-                        top = P[(r + R - k) % K, ch]
-                        bot = P[(r + R + k) % K, ch]
-                        kk = tg[R + k]
-                        for c in range(w):
-                            oc[c] += kk * (top[c] + bot[c])
-                    for c in range(R):
-                        out[c] = out[R + cmap[c]]
-                    for c in range(w + R, w + 2 * R):
-                        out[c] = out[R + cmap[c]]
-                    # horizontal sums (symmetric window), dense over the row: vectorised
-                    acc = J[ch]
-                    for c in range(w):
-                        acc[c] = k0 * oc[c]
-                    for k in range(1, R + 1):
-                        kk = tg[R + k]
-                        left = out[R - k : R - k + w]
-                        right = out[R + k : R + k + w]
-                        for c in range(w):
-                            acc[c] += kk * (left[c] + right[c])
-                for q in range(i, i + nstrong):
-                    c = cand[q]
-                    # eigenvalue ratio in float64, the reference's formula; no
-                    # short-circuit branches (the outcome is unpredictable)
-                    jxx = np.float64(J[0, c])
-                    jyy = np.float64(J[1, c])
-                    jxy = np.float64(J[2, c])
-                    hf = 0.5 * (jxx + jyy)
-                    dd = jxx - jyy
-                    d = 0.25 * (dd * dd) + jxy * jxy
-                    root = math.sqrt(max(d, 0.0))
-                    lam1 = hf + root
-                    lam2 = max(hf - root, 0.0)
-                    ok = (lam1 > 0.0) & (lam2 / lam1 <= max_ratio)
-                    if ok:
-                        mask[r, c] = True
-                        # angle at the edge points only (float32 atan2, as the reference)
-                        alpha[r, c] = math.atan2(gr[r, c], gc[r, c])
-                        count += 1
-            i = j
+        for q in range(ncand):
+            flat = cand[q]
+            r = flat // w
+            c = flat - r * w
+            m = mag[r, c]
+            if not (m >= thr and m > 0):
+                continue
+            ra, rb, wa, wb_ = r0[r], r1[r], wr0[r], wr1[r]
+            ca, cb, ua, ub = c0[c], c1[c], wc0[c], wc1[c]
+            ta, tb, tc, td = T[ra, ca], T[rb, ca], T[ra, cb], T[rb, cb]
+            jxx = ua * (wa * np.float64(ta[0]) + wb_ * np.float64(tb[0])) + ub * (wa * np.float64(tc[0]) + wb_ * np.float64(td[0]))
+            jyy = ua * (wa * np.float64(ta[1]) + wb_ * np.float64(tb[1])) + ub * (wa * np.float64(tc[1]) + wb_ * np.float64(td[1]))
+            jxy = ua * (wa * np.float64(ta[2]) + wb_ * np.float64(tb[2])) + ub * (wa * np.float64(tc[2]) + wb_ * np.float64(td[2]))
+            # eigenvalue ratio in float64, the reference's formula; no
+            # short-circuit branches (the outcome is unpredictable)
+            hf = 0.5 * (jxx + jyy)
+            dd = jxx - jyy
+            d = 0.25 * (dd * dd) + jxy * jxy
+            root = math.sqrt(max(d, 0.0))
+            lam1 = hf + root
+            lam2 = max(hf - root, 0.0)
+            ok = (lam1 > 0.0) & (lam2 / lam1 <= max_ratio)
+            # Branch-free (the outcome is unpredictable): mask the cell, and
+            # write it as edge point number ``count`` -- cell index into cand,
+            # gradient into gc/gr at flat position ``count`` -- which the next
+            # candidate overwrites unless ``ok``. Safe in place: count <= q <=
+            # cand[q], and later candidates read only larger positions. The
+            # caller takes the angles with numpy's SIMD atan2 (the
+            # reference's, bit for bit; ~40x faster than a scalar atan2 call
+            # per point).
+            mask[r, c] = ok
+            gyv = gr[r, c]
+            gxv = gc[r, c]
+            cand[count] = flat
+            gr.flat[count] = gyv
+            gc.flat[count] = gxv
+            count += ok
         return count
 
 
@@ -663,9 +646,15 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
     else:
         min_gradient = p.min_gradient
     if ncand:
-        rmap, cmap = k.border_maps(h, w)
+        T = ws.tensor
+        _nb_block_tensor(ws.gc, ws.gr, T)
+        cv2.sepFilter2D(T, cv2.CV_32F, k.tb, k.tb, dst=T, borderType=cv2.BORDER_REFLECT)  # in place: cv2 buffers rows
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
-        _nb_select(ws.gc, ws.gr, mag, ws.cand, ncand, np.float32(min_gradient), k.tg, rmap, cmap, float(p.max_corner_ratio), alpha, mask)
+        n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ncand, np.float32(min_gradient), T, *ws.read_back, float(p.max_corner_ratio), mask)
+        # the edge points' gradients are packed at the front of gc/gr (see _nb_select)
+        angle = ws.gc.ravel()[:n]
+        np.arctan2(ws.gr.ravel()[:n], angle, out=angle)
+        alpha.ravel()[ws.cand[:n]] = angle
     return NormalFlowEdges(vn, alpha, mag, mask, float(min_gradient))
 
 
@@ -745,15 +734,20 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
             np.greater(m, 0, out=tmp)
             inner &= tmp
         if inner.any():
-            # Structure tensor, smoothed on the full grid; the sparse work below
-            # (exact angle, eigenvalue ratio) runs in bands of rows so that its
-            # temporaries stay small (large freed blocks go back to the kernel
-            # and cost page faults on the next call).
-            tg = k.tg
-            for buf, (u, v) in zip((ws.Gs, ws.gt, ws.D), ((gc, gc), (gr, gr), (gc, gr))):
+            # Structure tensor on the block grid (products in the free buffers);
+            # the sparse work below (exact angle, eigenvalue ratio) runs in bands
+            # of rows so that its temporaries stay small (large freed blocks go
+            # back to the kernel and cost page faults on the next call).
+            T = ws.tensor
+            hb, wb = T.shape[0], T.shape[1]
+            rows0, cols0 = 2 * np.arange(hb), 2 * np.arange(wb)
+            rows1, cols1 = np.minimum(rows0 + 1, h - 1), np.minimum(cols0 + 1, w - 1)
+            for ch, (buf, (u, v)) in enumerate(zip((ws.Gs, ws.gt, ws.D), ((gc, gc), (gr, gr), (gc, gr)))):
                 prod = buf[:h, :w]
                 cv2.multiply(u, v, dst=prod)
-                cv2.sepFilter2D(prod, cv2.CV_32F, tg, tg, dst=prod, borderType=cv2.BORDER_REFLECT)
+                top, bot = prod[rows0], prod[rows1]
+                T[:, :, ch] = np.float32(0.25) * (((top[:, cols0] + top[:, cols1]) + bot[:, cols0]) + bot[:, cols1])
+            cv2.sepFilter2D(T, cv2.CV_32F, k.tb, k.tb, dst=T, borderType=cv2.BORDER_REFLECT)
             step = max(1, _BAND_CELLS // w)
             for r0 in range(b, h - b, step):
                 r1 = min(r0 + step, h - b)
@@ -774,10 +768,14 @@ def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
     gcs = ws.gc.ravel()[fi].astype(np.float64)
     grs = ws.gr.ravel()[fi].astype(np.float64)
     alpha.ravel()[idx] = np.arctan2(grs, gcs)
-    # Eigenvalue ratio of the smoothed structure tensor (float64, as the reference).
-    jxx = ws.Gs.ravel()[fi].astype(np.float64)
-    jyy = ws.gt.ravel()[fi].astype(np.float64)
-    jxy = ws.D.ravel()[fi].astype(np.float64)
+    # Eigenvalue ratio of the block tensor read back bilinearly (float64, as the reference).
+    r0, r1, wr0, wr1, c0, c1, wc0, wc1 = ws.read_back
+    rr, cc = idx // w, idx % w
+    T = ws.tensor
+    ua, ub, wa, wb = wc0[cc, None], wc1[cc, None], wr0[rr, None], wr1[rr, None]
+    top = wa * T[r0[rr], c0[cc]].astype(np.float64) + wb * T[r1[rr], c0[cc]].astype(np.float64)
+    bot = wa * T[r0[rr], c1[cc]].astype(np.float64) + wb * T[r1[rr], c1[cc]].astype(np.float64)
+    jxx, jyy, jxy = (ua * top + ub * bot).T
     half = 0.5 * (jxx + jyy)
     root = np.sqrt(np.maximum(0.25 * (jxx - jyy) ** 2 + jxy**2, 0.0))
     lam1 = half + root
