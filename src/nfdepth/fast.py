@@ -421,12 +421,15 @@ if _njit is not None:
         return n
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand):
-        """One pass over the cell grid: stencils, I_t, |grad I|, vn, zero crossings.
+    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, T):
+        """One pass over the cell grid: stencils, I_t, |grad I|, vn, zero crossings, block tensor.
 
         Writes ``gc, gr, mag, vn`` (cells), fills ``alpha`` with NaN and ``mask``
-        with False, and lists the zero-crossing cells inside the border (flat
-        cell indices, row-major) in ``cand``; returns their number.
+        with False, lists the zero-crossing cells inside the border (flat
+        cell indices, row-major) in ``cand`` and returns their number. ``T``
+        (hb, wb, 3) receives the gradient products averaged over 2 x 2 blocks
+        of cells (an odd last row or column replicated; the four products
+        summed in the reference's order, :func:`nfdepth.edges.block_structure_tensor`).
         """
         H, W = G1.shape
         h, w = H - 1, W - 1
@@ -492,6 +495,22 @@ if _njit is not None:
                 vr[c] = nan if m == 0 else v
                 ar[c] = nan
                 kr[c] = False
+            # block tensor: even rows start the block sums, odd rows (or a
+            # replicated last even row) finish them
+            tr = T[r // 2]
+            last = r % 2 == 0 and r == h - 1
+            for j in range(tr.shape[0]):
+                c0 = 2 * j
+                c1 = min(c0 + 1, w - 1)
+                x0, x1, y0, y1 = gcr[c0], gcr[c1], grr[c0], grr[c1]
+                if r % 2 == 0:
+                    tr[j, 0] = x0 * x0 + x1 * x1
+                    tr[j, 1] = y0 * y0 + y1 * y1
+                    tr[j, 2] = x0 * y0 + x1 * y1
+                if r % 2 == 1 or last:
+                    tr[j, 0] = quarter * ((tr[j, 0] + x0 * x0) + x1 * x1)
+                    tr[j, 1] = quarter * ((tr[j, 1] + y0 * y0) + y1 * y1)
+                    tr[j, 2] = quarter * ((tr[j, 2] + x0 * y0) + x1 * y1)
             if inside and b <= r < h - b:
                 for c in range(w):
                     ZC[c] = (p0[c] | p0[c + 1] | p1[c] | p1[c + 1]) & (n0[c] | n0[c + 1] | n1[c] | n1[c + 1])
@@ -558,38 +577,15 @@ if _njit is not None:
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_block_tensor(gc, gr, T):
-        """Gradient outer products averaged over 2 x 2 blocks of cells into ``T`` (hb, wb, 3).
-
-        An odd last row or column of cells is replicated, and the four
-        products are summed in the reference's order
-        (:func:`nfdepth.edges.block_structure_tensor`).
-        """
-        h, w = gc.shape
-        hb, wb = T.shape[0], T.shape[1]
-        for i in range(hb):
-            r0 = 2 * i
-            r1 = min(r0 + 1, h - 1)
-            a0, a1, b0, b1 = gc[r0], gc[r1], gr[r0], gr[r1]
-            t = T[i]
-            for j in range(wb):
-                c0 = 2 * j
-                c1 = min(c0 + 1, w - 1)
-                x00, x01, x10, x11 = a0[c0], a0[c1], a1[c0], a1[c1]
-                y00, y01, y10, y11 = b0[c0], b0[c1], b1[c0], b1[c1]
-                t[j, 0] = np.float32(0.25) * (((x00 * x00 + x01 * x01) + x10 * x10) + x11 * x11)
-                t[j, 1] = np.float32(0.25) * (((y00 * y00 + y01 * y01) + y10 * y10) + y11 * y11)
-                t[j, 2] = np.float32(0.25) * (((x00 * y00 + x01 * y01) + x10 * y10) + x11 * y11)
-
-    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
     def _nb_select(gc, gr, mag, cand, ncand, thr, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask):
-        """Strong test, corner test and angle at the zero-crossing cells ``cand[:ncand]``.
+        """Strong test and corner test at the zero-crossing cells ``cand[:ncand]``.
 
         The smoothed block tensor ``T`` (hb, wb, 3) is read back bilinearly at
         each strong candidate with the tables of
-        :func:`nfdepth.edges._block_read_back` (rows first, as the reference),
-        and its eigenvalue ratio is tested in float64. Returns the number of
-        edge points.
+        :func:`nfdepth.edges._block_read_back`, and its eigenvalue ratio is
+        tested in float64. Sets ``mask``; returns the number ``n`` of edge
+        points, whose cell indices are left in ``cand[:n]`` and gradients in
+        the first ``n`` elements of ``gc``/``gr`` (overwritten in place).
         """
         w = gc.shape[1]
         count = 0
@@ -639,7 +635,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
     h, w = ws.shape[0] - 1, ws.shape[1] - 1
     vn, alpha, mag, mask = ws.outputs()
     w0, w1, w2 = k.nb_weights
-    ncand = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand)
+    ncand = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.tensor)
     if p.min_gradient is None:
         high = _percentile_linear(mag, 99.0) if mag.size else 0.0
         min_gradient = p.relative_gradient * high
@@ -647,7 +643,6 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
         min_gradient = p.min_gradient
     if ncand:
         T = ws.tensor
-        _nb_block_tensor(ws.gc, ws.gr, T)
         cv2.sepFilter2D(T, cv2.CV_32F, k.tb, k.tb, dst=T, borderType=cv2.BORDER_REFLECT)  # in place: cv2 buffers rows
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
         n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ncand, np.float32(min_gradient), T, *ws.read_back, float(p.max_corner_ratio), mask)
