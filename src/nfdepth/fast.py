@@ -47,8 +47,8 @@ single-threaded loops (``fastmath=False``: bit-identical across runs, buffers
 and thread counts): one pass over the cell grid (combined stencils, ``I_t``,
 ``|grad I|``, ``vn``, Laplacian signs in cv2's own summation order, the list
 of zero-crossing cells), then, after the percentile (exact, as
-``np.percentile``), the block tensor (a compiled pass for the block means,
-``cv2.sepFilter2D`` for the window) and one pass over the candidates: strong
+``np.percentile``), the block tensor (its block means accumulated in the
+cell-grid pass, ``cv2.sepFilter2D`` for the window) and one pass over the candidates: strong
 test, bilinear read-back, eigenvalue test (float64, branch-free), with the
 accepted points' gradients packed for NumPy's SIMD float32 ``atan2`` (the
 reference's own; a scalar call costs ~25 ns a point). The percentile's top
@@ -225,13 +225,10 @@ class _Pool:
         return item[:4]
 
 
-class _TensorBuffers:
+def _tensor_buffers(h, w):
     """Block-grid structure tensor ((hb, wb, 3) float32, smoothed in place: 3 B/px) and its read-back tables."""
-
-    def __init__(self, h, w):
-        hb, wb = (h + 1) // 2, (w + 1) // 2
-        self.tensor = np.empty((hb, wb, 3), np.float32)
-        self.read_back = _block_read_back(h, hb) + _block_read_back(w, wb)
+    hb, wb = (h + 1) // 2, (w + 1) // 2
+    return np.empty((hb, wb, 3), np.float32), _block_read_back(h, hb) + _block_read_back(w, wb)
 
 
 class _Workspace(_Pool):
@@ -251,8 +248,7 @@ class _Workspace(_Pool):
         self.b1 = np.empty((H, W), bool)
         self.b2 = np.empty((H, W), bool)
         self.b3 = np.empty((h, w), bool)
-        tb = _TensorBuffers(h, w)
-        self.tensor, self.read_back = tb.tensor, tb.read_back
+        self.tensor, self.read_back = _tensor_buffers(h, w)
 
 
 class _NbWorkspace(_Pool):
@@ -267,8 +263,7 @@ class _NbWorkspace(_Pool):
         self.gc = np.empty((h, w), np.float32)
         self.gr = np.empty((h, w), np.float32)
         self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
-        tb = _TensorBuffers(h, w)
-        self.tensor, self.read_back = tb.tensor, tb.read_back
+        self.tensor, self.read_back = _tensor_buffers(h, w)
 
 
 _local = threading.local()
@@ -320,6 +315,10 @@ class _Kernels:
         self.kc1, self.kc2 = f32(0.75), f32(1.0 / 12.0)
         self.matched = p.stencil == "matched"
         self.tdiv = f32(2.0 * p.frame_interval)
+
+    def smooth_block_tensor(self, T):
+        """The corner window's Gaussian over the block tensor ``T`` (hb, wb, 3), in place (cv2 buffers rows)."""
+        return cv2.sepFilter2D(T, cv2.CV_32F, self.tb, self.tb, dst=T, borderType=cv2.BORDER_REFLECT)
 
 
 _kernel_cache: dict = {}
@@ -632,7 +631,6 @@ if _njit is not None:
 def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
     """Normal flow and edge points from three smoothed frames (numba path)."""
     p = k.p
-    h, w = ws.shape[0] - 1, ws.shape[1] - 1
     vn, alpha, mag, mask = ws.outputs()
     w0, w1, w2 = k.nb_weights
     ncand = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.tensor)
@@ -642,8 +640,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
     else:
         min_gradient = p.min_gradient
     if ncand:
-        T = ws.tensor
-        cv2.sepFilter2D(T, cv2.CV_32F, k.tb, k.tb, dst=T, borderType=cv2.BORDER_REFLECT)  # in place: cv2 buffers rows
+        T = k.smooth_block_tensor(ws.tensor)
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
         n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ncand, np.float32(min_gradient), T, *ws.read_back, float(p.max_corner_ratio), mask)
         # the edge points' gradients are packed at the front of gc/gr (see _nb_select)
@@ -742,7 +739,7 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
                 cv2.multiply(u, v, dst=prod)
                 top, bot = prod[rows0], prod[rows1]
                 T[:, :, ch] = np.float32(0.25) * (((top[:, cols0] + top[:, cols1]) + bot[:, cols0]) + bot[:, cols1])
-            cv2.sepFilter2D(T, cv2.CV_32F, k.tb, k.tb, dst=T, borderType=cv2.BORDER_REFLECT)
+            k.smooth_block_tensor(T)
             step = max(1, _BAND_CELLS // w)
             for r0 in range(b, h - b, step):
                 r1 = min(r0 + step, h - b)
