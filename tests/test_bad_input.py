@@ -141,6 +141,7 @@ BAD_LIBRARY_CALLS = [
     ("stereo positions len", _call(stereo.static_stereo, VIEWS3, reference=1, positions=[0, 1]), ValueError, "positions must hold one number per view (3), got shape (2,)"),
     ("stereo positions nan", _call(stereo.static_stereo, VIEWS3, reference=1, positions=[0, 1, np.nan]), ValueError, "positions must be finite"),
     ("stereo axis", _call(stereo.static_stereo, VIEWS3, reference=1, axis="z"), ValueError, "axis must be 'x' or 'y', got 'z'"),
+    ("stereo threads", _call(stereo.static_stereo, VIEWS3, reference=1, threads=0), ValueError, "threads must be an int >= 1 (or None: cv2.getNumThreads()), got 0"),
     ("stereo levels", _call(stereo.static_stereo, VIEWS3, reference=1, levels=99), ValueError, "levels must be >= 1 and leave at least 4 px at the coarsest level, got 99"),
     ("stereo nan pixel", _call(stereo.static_stereo, [TEX, TEX, np.full((32, 32), np.nan)], reference=1), ValueError, "views[2] contains 1024 non-finite"),
     ("stereo depth focal", _call(lambda: stereo.static_stereo(VIEWS3, reference=1).depth(focal_px=0.0, baseline=1.0)), ValueError, "focal_px must be a positive finite number, got 0.0"),
@@ -499,6 +500,7 @@ def _cli_cases(tmp: Path, v):
         ("view vmin", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "nan"], 2, "vmin must be a finite number, got nan"),
         ("view range", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "5", "--vmax", "1"], 2, "vmax must be >= vmin"),
         ("bench json", ["bench", "--json", str(tmp / "b.txt")], 2, "--json '" + str(tmp / "b.txt") + "' must end in one of .json"),
+        ("bench threads", ["bench", "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
         ("reproduce noise", ["reproduce", "--noise", "-1"], 2, "--noise must be a finite number >= 0"),
         ("reproduce json folder", ["reproduce", "--only", "exp1", "--json", str(tmp / "nodir" / "r.json")], 4, "does not exist"),
         ("reproduce out is a file", ["reproduce", "--only", "exp1", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),
@@ -606,7 +608,7 @@ sys.exit(main(sys.argv[2:]))
 """
 
 
-def _big_views(folder: Path, shape=(1200, 1600)) -> list[Path]:
+def _big_views(folder: Path, shape=(1600, 2400)) -> list[Path]:
     paths = []
     base = _texture((shape[0], shape[1] // 4), seed=3)
     tile = np.tile(base, (1, 4))

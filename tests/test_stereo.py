@@ -1,5 +1,6 @@
 """Coarse-to-fine multi-view static stereo (nfdepth.stereo)."""
 
+import itertools
 import os
 from pathlib import Path
 
@@ -383,3 +384,69 @@ def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
         d_nb, d_np = out[True][0], out[False][0]
         assert np.median(np.abs(d_nb - d_np)) < 0.02
         assert np.mean(np.abs(d_nb - d_np) < 0.1) > 0.99
+
+
+def test_row_strips_cover_the_image_in_a_power_of_two():
+    """The cost volume's strips depend on the height and radius only: contiguous, a power of two, >= the minimum height."""
+    from nfdepth._cost_volume import _MIN_STRIP_ROWS, _row_strips
+
+    for h, r in ((480, 9), (960, 9), (1920, 9), (100, 9), (5, 9), (3000, 40), (10**5, 1)):
+        strips = _row_strips(h, r)
+        n = len(strips)
+        assert n & (n - 1) == 0 and n <= 16
+        assert strips[0][0] == 0 and strips[-1][1] == h
+        assert all(a[1] == b[0] for a, b in itertools.pairwise(strips))
+        if n > 1:
+            assert min(b - a for a, b in strips) >= max(_MIN_STRIP_ROWS, 8 * r) - 1
+    assert len(_row_strips(480, 9)) == 2 and len(_row_strips(960, 9)) == 4
+
+
+@pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
+@pytest.mark.parametrize("radius", [2, 4])
+def test_cost_volume_strips_and_threads(radius, monkeypatch):
+    """Row strips (each with its own halo) give the one-strip result; the thread count changes nothing.
+
+    A strip's box sums start afresh at its first row instead of sliding down
+    from row 0, so they may differ from the one-strip sums by float64
+    rounding: 1e-5 relative on the costs, and the same winners.
+    """
+    from nfdepth import _cost_volume, fast
+
+    if not fast.USE_NUMBA:
+        pytest.skip("numba backend disabled")
+    views = _plane_views(3.2, positions=(0, 1, 2, 3), reference=1)
+    t = np.array([-1.0, 0.0, 1.0, 2.0])
+    feats = _cost_volume._match_features(views)
+    spread = float(np.percentile(views[1], 99) - np.percentile(views[1], 1))
+    guide = ((views[1] - np.percentile(views[1], 1)) / spread).astype(np.float32)
+    cand = np.arange(-1.0, 8.0, 0.5)
+    kw = {"radius": radius, "eps": 1e-4, "tau_i": 0.03 * spread, "tau_g": 0.01 * spread, "alpha": 0.9, "exclude_px": 1.0}
+    one = _cost_volume.best_disparity(feats, t, 1, cand, guide, **kw)
+    monkeypatch.setattr(_cost_volume, "_MIN_STRIP_ROWS", 4)
+    assert len(_cost_volume._row_strips(SHAPE[0], radius)) >= 2
+    single = _cost_volume.best_disparity(feats, t, 1, cand, guide, threads=1, **kw)
+    many = _cost_volume.best_disparity(feats, t, 1, cand, guide, threads=3, **kw)
+    for a, b, c in zip(one, single, many):
+        assert b.tobytes() == c.tobytes()
+        np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-6)
+
+
+def test_refine_edges_centre_stencil_equals_full_gradients():
+    """The edge refinement's centre-cell stencil is gradients() at the patch's centre cell, bit for bit."""
+    from nfdepth.normal_flow import gradients
+    from nfdepth.stereo import _centre_cell_mean, _centre_col_gradient, _EdgePatches
+
+    rng = np.random.default_rng(3)
+    rows = rng.integers(0, SHAPE[0], 2500)
+    cols = rng.integers(0, SHAPE[1], 2500)
+    patches = _EdgePatches(rows, cols)
+    ref, _ = patches.sample(TEXTURE, np.zeros(rows.size, np.float32))
+    warped, inside = patches.sample(TEXTURE, rng.normal(0.0, 3.0, rows.size).astype(np.float32))
+    g = gradients([ref, warped], frame_interval=1.0, stencil="matched")
+    n = rows.size
+    np.testing.assert_array_equal(_centre_cell_mean(warped - ref, n), g.grad_t[1::4, 1::4].ravel()[:n])
+    np.testing.assert_array_equal(0.5 * (_centre_col_gradient(ref, n) + _centre_col_gradient(warped, n)), g.grad_col[1::4, 1::4].ravel()[:n])
+    # inside: every node of the patch samples the image (the column map of the last sample)
+    mx = patches.map_x
+    np.testing.assert_array_equal(inside, ((mx >= -0.5) & (mx <= SHAPE[1] - 0.5)).all(axis=(1, 3)).ravel()[:n])
+    assert 0 < inside.sum() < n

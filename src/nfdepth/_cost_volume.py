@@ -22,7 +22,10 @@ sums):
   coefficients, the second box sums with the output -- as running sums in
   float64 (``cv2.boxFilter``'s own accumulator type), then the
   winner-take-all update over chunks of candidates, the per-pixel state
-  kept in locals across a chunk. Results agree with the reference to
+  kept in locals across a chunk. The image is cut into row strips fixed by
+  its height (:func:`_row_strips`), each with a halo of twice the box
+  radius, that run on ``threads`` threads (the kernels release the GIL), so
+  the result does not depend on the thread count. Results agree with the reference to
   float32 rounding (box sums in another order: a few ulp; on the 640 x 480
   Middlebury Art crop of the benchmark they are bit-identical); a cost tie
   within that rounding can pick the other candidate.
@@ -33,7 +36,10 @@ range.
 
 from __future__ import annotations
 
+import itertools
 import math
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
@@ -46,6 +52,8 @@ except ImportError:  # pragma: no cover - depends on the environment
     _njit = None
 
 _CHUNK = 8  # candidates per winner-take-all update of the numba path
+_MIN_STRIP_ROWS = 200  # rows per strip of the numba path (see _row_strips)
+_MAX_STRIPS = 16
 
 
 def _box(a: np.ndarray, radius: int) -> np.ndarray:
@@ -214,7 +222,7 @@ def _streaming_wta(slices, candidates, *, exclude_px=1.0):
     return _wta_finish(idx, best, win, np.minimum(far_before, after), candidates, step, m, exclude_px)
 
 
-def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_g, alpha, exclude_px=1.0):
+def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_g, alpha, exclude_px=1.0, threads=1):
     """Winner of the aggregated cost volume over ``candidates`` and its uniqueness.
 
     Parameters
@@ -234,6 +242,9 @@ def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_
         Truncations and gradient weight of the per-view cost.
     exclude_px : float
         Candidates farther than this from the winner count for ``c_second``.
+    threads : int
+        Threads of the numba path, over the row strips of :func:`_row_strips`
+        (the result does not depend on it).
 
     Returns
     -------
@@ -241,55 +252,111 @@ def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_
     """
     agg = _GuidedAggregator(guide, radius, eps)
     if _fast.USE_NUMBA and _njit is not None:
-        return _nb_best_disparity(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha, exclude_px=exclude_px)
+        return _nb_best_disparity(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha, exclude_px=exclude_px, threads=threads)
     slices = _cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)
     return _streaming_wta(slices, candidates, exclude_px=exclude_px)
 
 
-def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px):
-    """:func:`best_disparity` with the fused numba kernels (see the module docstring)."""
+def _row_strips(h, radius):
+    """Row strips of the numba cost volume: a power of two of them, fixed by the image height and box radius.
+
+    The strips depend only on ``h`` and ``radius``, never on the thread
+    count, so results are the same on any machine. Each strip is at least
+    ``max(_MIN_STRIP_ROWS, 8 radius)`` rows (its halo recomputes ``4 radius``
+    rows of per-view costs), at most ``_MAX_STRIPS``.
+    """
+    n = 1
+    while 2 * n <= _MAX_STRIPS and h / (2 * n) >= max(_MIN_STRIP_ROWS, 8 * radius):
+        n *= 2
+    edges = [round(k * h / n) for k in range(n + 1)]
+    return list(itertools.pairwise(edges))
+
+
+def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px, threads=1):
+    """:func:`best_disparity` with the fused numba kernels (see the module docstring), strips on ``threads`` threads."""
     fi = np.stack([f[0] for f in feats]).astype(np.float32, copy=False)
     fg = np.stack([f[1] for f in feats]).astype(np.float32, copy=False)
     _, h, w = fi.shape
     r = agg.r
     sides = [np.asarray(ks, np.int64) for ks in _sides(t, ref)]
+    shifts = [[np.array([float(t[k]) * float(dj) for k in ks], np.float64) for ks in sides] for dj in candidates]
     f32 = np.float32
     a1, a2 = f32(1.0 - alpha), f32(alpha)
     ti, tg = f32(tau_i), f32(tau_g)
     fill = f32((1.0 - alpha) * tau_i + alpha * tau_g)
     add_r, sub_r = _box_index(h, r)
     add_c, sub_c = _box_index(w, r)
-    init_r = np.array([cv2.borderInterpolate(i, h, cv2.BORDER_REFLECT) for i in range(-r, r + 1)], np.int64)
-    init_c = np.array([cv2.borderInterpolate(i, w, cv2.BORDER_REFLECT) for i in range(-r, r + 1)], np.int64)
+    init_c = _window_rows(0, w, r)
     inv_area = 1.0 / float((2 * r + 1) ** 2)
     n = len(candidates)
+    if n == 0:
+        msg = "no cost slices"
+        raise ValueError(msg)
+    m, step = _window_half(candidates, exclude_px)
+    idx, state = _nb_wta_state((h, w), m)
 
-    def chunks():
-        # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
-        buf = np.empty((h, w, min(_CHUNK, n)), f32)
-        p, q, a, b = (np.empty((h, w), f32) for _ in range(4))
+    stop = threading.Event()  # set when the caller is interrupted: the other strips end at their next chunk
+
+    def run_strip(y0, y1):
+        # output rows y0 .. y1 - 1 need guided coefficients r rows beyond, and those costs r rows further
+        ya, yb = max(0, y0 - r), min(h, y1 + r)
+        yp, yq = max(0, y0 - 2 * r), min(h, y1 + 2 * r)
+        init_ab, init_out = _window_rows(ya, h, r), _window_rows(y0, h, r)
+        p, q = np.empty((yq - yp, w), f32), np.empty((yq - yp, w), f32)
+        a, b = np.empty((yb - ya, w), f32), np.empty((yb - ya, w), f32)
         colcnt = np.empty(w, f32)
+        # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
+        buf = np.empty((y1 - y0, w, min(_CHUNK, n)), f32)
         for j0 in range(0, n, buf.shape[2]):
-            cands = candidates[j0 : j0 + buf.shape[2]]
-            for jj, dj in enumerate(cands):
+            if stop.is_set():
+                return
+            count = min(buf.shape[2], n - j0)
+            for jj in range(count):
                 for si, ks in enumerate(sides):
-                    shifts = np.array([float(t[k]) * float(dj) for k in ks], np.float64)
-                    _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, ti, tg, fill, agg.g, p, q, colcnt)
-                    _nb_box_coeffs(p, q, agg.mi, agg.inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b)
-                    _nb_box_finish(a, b, agg.g, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, si == 0)
-            yield buf, len(cands)
+                    _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p, q, colcnt, yp, yq)
+                    _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya)
+                    _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, si == 0, y0, y1, ya)
+            _nb_wta_chunk(buf, count, j0, m, idx[y0:y1], state[y0:y1])
 
-    return _nb_streaming_wta(chunks(), candidates, (h, w), exclude_px=exclude_px)
+    strips = _row_strips(h, r)
+    workers = max(1, min(int(threads), len(strips)))
+    if workers == 1:
+        for y0, y1 in strips:
+            run_strip(y0, y1)
+    else:
+        # the kernels release the GIL; each strip writes its own rows of idx and state
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            try:
+                for fut in [pool.submit(run_strip, y0, y1) for y0, y1 in strips]:
+                    fut.result()
+            except BaseException:  # KeyboardInterrupt, a signal turned exception, a failed strip
+                stop.set()
+                pool.shutdown(cancel_futures=True)
+                raise
+    return _nb_wta_result(idx, state, candidates, step, m, exclude_px)
+
+
+def _window_rows(y, n, r):
+    """The (cv2.BORDER_REFLECT) indices ``y - r .. y + r`` of a box window in a length-``n`` axis."""
+    return np.array([cv2.borderInterpolate(i, n, cv2.BORDER_REFLECT) for i in range(y - r, y + r + 1)], np.int64)
+
+
+def _nb_wta_state(shape, m):
+    """Winner index and the per-pixel state of :func:`_nb_wta_chunk`, initialised."""
+    # per-pixel state, interleaved (planes 300 x 4 KiB apart alias in the cache):
+    # best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
+    return np.zeros(shape, np.int32), np.full((*shape, 3 + (2 * m - 1) + m), np.inf, np.float32)
+
+
+def _nb_wta_result(idx, state, candidates, step, m, exclude_px):
+    win = [state[:, :, 3 + k] for k in range(2 * m - 1)]
+    return _wta_finish(idx, state[:, :, 0].copy(), win, state[:, :, 2], candidates, step, m, exclude_px)
 
 
 def _nb_streaming_wta(chunks, candidates, shape, *, exclude_px):
     """:func:`_streaming_wta` over chunks ``(buf, count)``: ``buf[:, :, :count]`` holds the next ``count`` slices."""
     m, step = _window_half(candidates, exclude_px)
-    nw = 2 * m - 1
-    idx = np.zeros(shape, np.int32)
-    # per-pixel state, interleaved (planes 300 x 4 KiB apart alias in the cache):
-    # best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
-    state = np.full((*shape, 3 + nw + m), np.inf, np.float32)
+    idx, state = _nb_wta_state(shape, m)
     j0 = 0
     for buf, count in chunks:
         _nb_wta_chunk(buf, count, j0, m, idx, state)
@@ -297,8 +364,7 @@ def _nb_streaming_wta(chunks, candidates, shape, *, exclude_px):
     if j0 == 0:
         msg = "no cost slices"
         raise ValueError(msg)
-    win = [state[:, :, 3 + k] for k in range(nw)]
-    return _wta_finish(idx, state[:, :, 0].copy(), win, state[:, :, 2], candidates, step, m, exclude_px)
+    return _nb_wta_result(idx, state, candidates, step, m, exclude_px)
 
 
 def _box_index(n, r):
@@ -312,15 +378,17 @@ if _njit is not None:
     _jit = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
 
     @_jit
-    def _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, tau_i, tau_g, fill, guide, p, q, colcnt):
-        """Mean truncated cost of the views ``ks`` shifted by ``shifts`` (``p``) and ``guide * p`` (``q``).
+    def _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, tau_i, tau_g, fill, guide, p, q, colcnt, r_lo, r_hi):
+        """Mean truncated cost of the views ``ks`` shifted by ``shifts`` (``p``) and ``guide * p`` (``q``), rows ``r_lo .. r_hi - 1``.
+
+        Row ``r`` goes to row ``r - r_lo`` of ``p`` and ``q``.
 
         View ``k`` at column ``c`` is sampled at ``x = c - s``: with ``o =
         floor(-s)`` and ``f = -s - o``, between columns ``c + o`` and ``c + o + 1``
         with the same weights on the whole image (border replicated, as
         ``cv2.warpAffine``); columns with ``x`` outside ``[0, w - 1]`` do not count.
         """
-        _, h, w = fi.shape
+        w = fi.shape[2]
         nk = ks.size
         lo = np.empty(nk, np.int64)
         hi = np.empty(nk, np.int64)
@@ -346,7 +414,7 @@ if _njit is not None:
             hi[v] = last + 1
         acc = np.empty(w, np.float32)
         one = np.float32(1.0)
-        for r in range(h):
+        for r in range(r_lo, r_hi):
             ir = fi[ref, r]
             gr = fg[ref, r]
             for c in range(w):
@@ -367,8 +435,8 @@ if _njit is not None:
                     cg = min(abs(vg - gr[c]), tau_g)
                     acc[c] += a1 * ci + a2 * cg
             gd = guide[r]
-            pr = p[r]
-            qr = q[r]
+            pr = p[r - r_lo]
+            qr = q[r - r_lo]
             for c in range(w):
                 cn = colcnt[c]
                 mean = acc[c] / max(cn, one) if cn > 0 else fill
@@ -380,20 +448,21 @@ if _njit is not None:
     _jit_inline = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
 
     @_jit_inline
-    def _nb_columns_init(a, b, rows, col_a, col_b):
-        """Column sums of ``a`` and ``b`` over the (reflected) ``rows`` of the first window."""
+    def _nb_columns_init(a, b, rows, off, col_a, col_b):
+        """Column sums of ``a`` and ``b`` over the (reflected) image ``rows`` of the first window (image row ``y`` is array row ``y - off``)."""
         w = a.shape[1]
         for c in range(w):
             col_a[c] = 0.0
             col_b[c] = 0.0
-        for y in rows:
+        for yy in rows:
+            y = yy - off
             for c in range(w):
                 col_a[c] += a[y, c]
                 col_b[c] += b[y, c]
 
     @_jit_inline
     def _nb_columns_step(a, b, y_add, y_sub, col_a, col_b):
-        """Slide the column sums one row down: add row ``y_add``, drop row ``y_sub``."""
+        """Slide the column sums one row down: add array row ``y_add``, drop array row ``y_sub``."""
         for c in range(a.shape[1]):
             col_a[c] += np.float64(a[y_add, c]) - np.float64(a[y_sub, c])
             col_b[c] += np.float64(b[y_add, c]) - np.float64(b[y_sub, c])
@@ -409,18 +478,23 @@ if _njit is not None:
         return sa, sb
 
     @_jit
-    def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b):
-        """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` (float64 running sums)."""
-        h, w = p.shape
+    def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, y_lo, y_hi, src_off, dst_off):
+        """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` (float64 running sums).
+
+        Image rows ``y_lo .. y_hi - 1``; ``init_r`` are the (reflected) image
+        rows of ``y_lo``'s window. Image row ``y`` is row ``y - src_off`` of
+        ``p``, ``q`` and row ``y - dst_off`` of ``a``, ``b``.
+        """
+        w = p.shape[1]
         colp = np.empty(w, np.float64)
         colq = np.empty(w, np.float64)
-        _nb_columns_init(p, q, init_r, colp, colq)
-        for y in range(h):
+        _nb_columns_init(p, q, init_r, src_off, colp, colq)
+        for y in range(y_lo, y_hi):
             sp, sq = _nb_row_start(colp, colq, init_c)
             mir = mi[y]
             invr = inv[y]
-            ar = a[y]
-            br = b[y]
+            ar = a[y - dst_off]
+            br = b[y - dst_off]
             for x in range(w):
                 mp = np.float32(sp * inv_area)
                 mq = np.float32(sq * inv_area)
@@ -429,20 +503,25 @@ if _njit is not None:
                 br[x] = mp - av * mir[x]
                 sp += colp[add_c[x]] - colp[sub_c[x]]
                 sq += colq[add_c[x]] - colq[sub_c[x]]
-            _nb_columns_step(p, q, add_r[y], sub_r[y], colp, colq)
+            if y + 1 < y_hi:
+                _nb_columns_step(p, q, add_r[y] - src_off, sub_r[y] - src_off, colp, colq)
 
     @_jit
-    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, first):
-        """Guided-filter output ``box(a) guide + box(b)`` (inf in columns no view covers) into ``out[:, :, plane]``, or its minimum with it."""
-        h, w = a.shape
+    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, first, y_lo, y_hi, src_off):
+        """Guided-filter output ``box(a) guide + box(b)`` (inf in columns no view covers) into ``out[:, :, plane]``, or its minimum with it.
+
+        Image rows ``y_lo .. y_hi - 1`` (row ``y - y_lo`` of ``out``); image
+        row ``y`` is row ``y - src_off`` of ``a`` and ``b``.
+        """
+        w = a.shape[1]
         cola = np.empty(w, np.float64)
         colb = np.empty(w, np.float64)
         inf = np.float32(np.inf)
-        _nb_columns_init(a, b, init_r, cola, colb)
-        for y in range(h):
+        _nb_columns_init(a, b, init_r, src_off, cola, colb)
+        for y in range(y_lo, y_hi):
             sa, sb = _nb_row_start(cola, colb, init_c)
             gr = guide[y]
-            orow = out[y]
+            orow = out[y - y_lo]
             for x in range(w):
                 v = np.float32(sa * inv_area) * gr[x] + np.float32(sb * inv_area)
                 if colcnt[x] == 0:
@@ -451,7 +530,8 @@ if _njit is not None:
                     orow[x, plane] = v
                 sa += cola[add_c[x]] - cola[sub_c[x]]
                 sb += colb[add_c[x]] - colb[sub_c[x]]
-            _nb_columns_step(a, b, add_r[y], sub_r[y], cola, colb)
+            if y + 1 < y_hi:
+                _nb_columns_step(a, b, add_r[y] - src_off, sub_r[y] - src_off, cola, colb)
 
     @_jit
     def _nb_wta_chunk(chunk, count, j0, m, idx, state):

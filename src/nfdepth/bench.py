@@ -22,8 +22,9 @@ Cases (per image size and scene):
 ``ratio_to_floor`` is a case's median over ``floor_blur3``'s; ``ratio_to_nf_edges``
 over ``nf_edges``'s (for ``nf_stream_frame``: streaming cost per frame ÷ from scratch).
 The fast path runs on the fused numba kernels when numba is installed (the
-environment record says which backend ran); numba is single-threaded here,
-so only ``threads`` (OpenCV) matters.
+environment record says which backend ran). ``threads`` sets
+``cv2.setNumThreads``; static stereo's cost volume runs on that many threads
+(its default follows ``cv2.getNumThreads()``), the edge fast path on one.
 
 Peak memory is measured with :mod:`tracemalloc` in a separate, untimed call:
 it counts every NumPy array (including the arrays OpenCV returns, which
@@ -353,9 +354,9 @@ def _environment() -> dict:
     }
 
 
-def bench_main(*, json_path=None, quick: bool = False) -> int:
+def bench_main(*, json_path=None, quick: bool = False, threads: int = 1) -> int:
     """Run the benchmarks, print the markdown table, write JSON atomically; return 0."""
-    records = run_benchmarks(quick=quick)
+    records = run_benchmarks(quick=quick, threads=threads)
     print(render_markdown(records))
     if json_path is not None:
         path = Path(json_path)

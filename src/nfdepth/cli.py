@@ -406,7 +406,9 @@ def _cmd_bench(args) -> int:
 
     if args.json:
         _check_output(args.json, force=True, exts=(".json",), what="--json")
-    return int(bench_main(json_path=args.json, quick=args.quick))
+    if args.threads < 1:
+        raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
+    return int(bench_main(json_path=args.json, quick=args.quick, threads=args.threads))
 
 
 # ---------------------------------------------------------------- the parser
@@ -469,6 +471,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="benchmarks against OpenCV (SGBM, BM, DIS) and the memory floor")
     p.add_argument("--json", metavar="FILE", help="write the records as JSON")
     p.add_argument("--quick", action="store_true", help="small sizes, fewer repeats (< 1 min)")
+    p.add_argument("--threads", type=int, default=1, metavar="N", help="cv2.setNumThreads while timing; static stereo's cost volume follows it (default 1)")
     p.set_defaults(func=_cmd_bench)
 
     for module in _PLUGIN_COMMANDS:

@@ -489,35 +489,59 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True) -> _Meas
 _TILE = 1024  # patches per tile row (cv2.remap needs fewer than 32767 columns)
 
 
-def _edge_patches(smoothed_k, rows, cols, shift):
-    """4 x 4 node patches around pixels ``(rows, cols)``, each warped by its own constant shift.
+class _EdgePatches:
+    """4 x 4 node patches around pixels ``(rows, cols)``, each warped by its own constant column shift.
 
     The patches are tiled into a ``(4 R, 4 C)`` image (``C = _TILE``); the
     centre cell of patch ``i`` is cell ``[4 (i // C) + 1, 4 (i % C) + 1]`` of
     its gradient field, and the stencil of that cell reads only its own patch.
+    The row map is built once; each :meth:`sample` builds the column map.
     """
-    offs = np.array([-1.5, -0.5, 0.5, 1.5], np.float32)
-    n = rows.size
-    n_rows = max(1, -(-n // _TILE))
-    total = n_rows * _TILE
-    pr = np.zeros(total, np.float32)
-    pc = np.zeros(total, np.float32)
-    ps = np.zeros(total, np.float32)
-    pr[:n], pc[:n], ps[:n] = rows, cols, shift
-    pr, pc, ps = (a.reshape(n_rows, _TILE) for a in (pr, pc, ps))
-    map_y = pr[:, None, :, None] + offs[None, :, None, None] + np.zeros((1, 1, 1, 4), np.float32)
-    map_x = pc[:, None, :, None] - ps[:, None, :, None] + offs[None, None, None, :] + np.zeros((1, 4, 1, 1), np.float32)
-    map_x = map_x.reshape(4 * n_rows, 4 * _TILE).astype(np.float32)
-    map_y = map_y.reshape(4 * n_rows, 4 * _TILE).astype(np.float32)
-    patch = cv2.remap(smoothed_k, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    w = smoothed_k.shape[1]
-    inside = ((map_x >= -0.5) & (map_x <= w - 0.5)).reshape(n_rows, 4, _TILE, 4).all(axis=(1, 3)).ravel()[:n]
-    return patch, inside
+
+    _OFFS = np.array([-1.5, -0.5, 0.5, 1.5], np.float32)
+
+    def __init__(self, rows, cols):
+        self.n = rows.size
+        self.n_rows = max(1, -(-self.n // _TILE))
+        pr = np.zeros(self.n_rows * _TILE, np.float32)
+        self.pc = np.zeros(self.n_rows * _TILE, np.float32)
+        pr[: self.n], self.pc[: self.n] = rows, cols
+        pr = pr.reshape(self.n_rows, _TILE)
+        self.map_y = np.empty((self.n_rows, 4, _TILE, 4), np.float32)
+        np.add(pr[:, None, :, None], self._OFFS[None, :, None, None], out=self.map_y)
+        self.map_y = self.map_y.reshape(4 * self.n_rows, 4 * _TILE)
+        self.map_x = np.empty((self.n_rows, 4, _TILE, 4), np.float32)
+
+    def sample(self, image, shift):
+        """``(patch, inside)``: the tiled patches of ``image`` sampled at columns ``c - shift``; whether each stays in the image."""
+        ps = np.zeros(self.n_rows * _TILE, np.float32)
+        ps[: self.n] = shift
+        centre = (self.pc - ps).reshape(self.n_rows, _TILE)
+        np.add(centre[:, None, :, None], self._OFFS[None, None, None, :], out=self.map_x)
+        patch = cv2.remap(image, self.map_x.reshape(4 * self.n_rows, 4 * _TILE), self.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        w = image.shape[1]
+        c = centre.ravel()[: self.n]
+        inside = (c + self._OFFS[0] >= -0.5) & (c + self._OFFS[-1] <= w - 0.5)
+        return patch, inside
 
 
-def _patch_centres(a: np.ndarray, n: int) -> np.ndarray:
-    """Centre-cell values of the tiled patches (see :func:`_edge_patches`)."""
-    return a[1::4, 1::4].ravel()[:n]
+def _centre_col_gradient(patch: np.ndarray, n: int) -> np.ndarray:
+    """The matched stencil's ``I_col`` of the centre cell of each tiled patch (see :class:`_EdgePatches`).
+
+    The same arithmetic as :func:`nfdepth.normal_flow.gradients` at that cell
+    (four-point column difference on node rows 1 and 2, averaged), on the
+    patch's own 4 x 4 nodes only.
+    """
+    p = patch.reshape(patch.shape[0] // 4, 4, patch.shape[1] // 4, 4)
+    dc1 = 0.75 * (p[:, 1, :, 2] - p[:, 1, :, 1]) + (1.0 / 12.0) * (p[:, 1, :, 3] - p[:, 1, :, 0])
+    dc2 = 0.75 * (p[:, 2, :, 2] - p[:, 2, :, 1]) + (1.0 / 12.0) * (p[:, 2, :, 3] - p[:, 2, :, 0])
+    return (0.5 * (dc1 + dc2)).ravel()[:n]
+
+
+def _centre_cell_mean(patch: np.ndarray, n: int) -> np.ndarray:
+    """Mean of the centre cell's four nodes of each tiled patch."""
+    p = patch.reshape(patch.shape[0] // 4, 4, patch.shape[1] // 4, 4)
+    return (0.25 * (p[:, 1, :, 1] + p[:, 1, :, 2] + p[:, 2, :, 1] + p[:, 2, :, 2])).ravel()[:n]
 
 
 def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations):
@@ -531,17 +555,20 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations):
     cols = cols.astype(np.float32)
     n = len(smoothed)
     npts = d.size
-    ref_patch, _ = _edge_patches(smoothed[ref], rows, cols, np.zeros_like(d))
+    patches = _EdgePatches(rows, cols)
+    ref_patch, _ = patches.sample(smoothed[ref], np.zeros_like(d))
+    # the pair stencil of paper section 3.1 at each point's centre cell, as
+    # gradients([ref_patch, patch]) gives it there (its other cells are unused)
+    ref_gc = _centre_col_gradient(ref_patch, npts)
     result = None
     for _ in range(max(1, iterations)):
         diffs, gcs, wts = [None] * n, [None] * n, [None] * n
         for k in range(n):
             if k == ref:
                 continue
-            patch, inside = _edge_patches(smoothed[k], rows, cols, t[k] * d)
-            g = gradients([ref_patch, patch], frame_interval=1.0, stencil="matched")
-            diffs[k] = _patch_centres(g.grad_t, npts)
-            gcs[k] = _patch_centres(g.grad_col, npts)
+            patch, inside = patches.sample(smoothed[k], t[k] * d)
+            diffs[k] = _centre_cell_mean(patch - ref_patch, npts)
+            gcs[k] = 0.5 * (ref_gc + _centre_col_gradient(patch, npts))
             wts[k] = (weights[k] * inside).astype(np.float32)
         slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, wts)
         wsum = np.sum([wts[k] for k in range(n) if k != ref], axis=0)
@@ -658,6 +685,7 @@ def static_stereo(
     min_cost_margin: float = 0.05,
     edge_cost_margin: float = 0.1,
     edge_step_px: float = 0.5,
+    threads: int | None = None,
     dtype=np.float32,
 ) -> StereoResult:
     """Dense multi-view disparity from relative normal flow, coarse to fine.
@@ -767,6 +795,10 @@ def static_stereo(
         ``UNCERTAIN`` (module docstring, step 4; 0: no test).
     polish_radius : int
         Guided-filter radius of the differential polish.
+    threads : int, optional
+        Threads of the cost volume (numba path; row strips fixed by the image
+        size, so the result does not depend on it). Default OpenCV's
+        ``cv2.getNumThreads()``, so ``cv2.setNumThreads`` governs both.
     dtype : float32
         Working precision (float32; float64 is accepted and converted).
 
@@ -810,6 +842,11 @@ def static_stereo(
         raise ValueError(msg)
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
+        raise ValueError(msg)
+    if threads is None:
+        threads = max(1, cv2.getNumThreads())
+    elif isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+        msg = f"threads must be an int >= 1 (or None: cv2.getNumThreads()), got {threads!r}"
         raise ValueError(msg)
     if int(iterations_per_level) < 1 or int(edge_iterations) < 0:
         msg = "iterations_per_level must be >= 1 and edge_iterations >= 0"
@@ -891,7 +928,7 @@ def static_stereo(
             # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
             d, c_best, c_second = best_disparity(
                 feats, t, ref, candidates, guide[0], radius=cost_radius, eps=cost_eps,
-                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0,
+                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0, threads=int(threads),
             )
             del feats, src
             # uniqueness: the best cost against the best one more than 1 px away
