@@ -293,7 +293,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         msg = "no cost slices"
         raise ValueError(msg)
     m, step = _window_half(candidates, exclude_px)
-    idx, state = _nb_wta_state((h, w), m)
+    out = [np.empty((h, w), f32) for _ in range(3)]  # d, c_best, c_second
 
     stop = threading.Event()  # set when the caller is interrupted: the other strips end at their next chunk
 
@@ -307,6 +307,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         colcnt = np.empty(w, f32)
         # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
         buf = np.empty((y1 - y0, w, min(_CHUNK, n)), f32)
+        idx, state = _nb_wta_state((y1 - y0, w), m)  # the strip's own (first touched by its thread)
         for j0 in range(0, n, buf.shape[2]):
             if stop.is_set():
                 return
@@ -316,7 +317,9 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
                     _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p, q, colcnt, yp, yq)
                     _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya)
                     _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, si == 0, y0, y1, ya)
-            _nb_wta_chunk(buf, count, j0, m, idx[y0:y1], state[y0:y1])
+            _nb_wta_chunk(buf, count, j0, m, idx, state)
+        for o, v in zip(out, _nb_wta_result(idx, state, candidates, step, m, exclude_px)):
+            o[y0:y1] = v
 
     strips = _row_strips(h, r)
     workers = max(1, min(int(threads), len(strips)))
@@ -324,7 +327,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         for y0, y1 in strips:
             run_strip(y0, y1)
     else:
-        # the kernels release the GIL; each strip writes its own rows of idx and state
+        # the kernels (and NumPy's loops of the finish) release the GIL; each strip writes its own rows
         with ThreadPoolExecutor(max_workers=workers) as pool:
             try:
                 for fut in [pool.submit(run_strip, y0, y1) for y0, y1 in strips]:
@@ -333,7 +336,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
                 stop.set()
                 pool.shutdown(cancel_futures=True)
                 raise
-    return _nb_wta_result(idx, state, candidates, step, m, exclude_px)
+    return tuple(out)
 
 
 def _window_rows(y, n, r):
