@@ -16,11 +16,11 @@ sums):
   reference and the fallback without numba: about 30 full-image array
   operations and eight ``cv2.boxFilter`` calls per candidate.
 * numba (:func:`_nb_best_disparity`, used when :data:`nfdepth.fast.USE_NUMBA`):
-  per candidate and side three fused passes -- the side's mean cost (the
-  view shift is constant along a row, so it is a fixed-weight two-tap
-  interpolation), the guided filter's first box sums with its
-  coefficients, the second box sums with the output -- as running sums in
-  float64 (``cv2.boxFilter``'s own accumulator type), then the
+  per candidate the sides' mean costs (the view shift is constant along a
+  row, so it is a fixed-weight two-tap interpolation), then two fused
+  passes over both sides at once -- the guided filter's first box sums with
+  its coefficients, the second box sums with the better side's output -- as
+  running sums in float64 (``cv2.boxFilter``'s own accumulator type), then the
   winner-take-all update over chunks of candidates, the per-pixel state
   kept in locals across a chunk. The image is cut into row strips fixed by
   its height (:func:`_row_strips`), each with a halo of twice the box
@@ -302,9 +302,11 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         ya, yb = max(0, y0 - r), min(h, y1 + r)
         yp, yq = max(0, y0 - 2 * r), min(h, y1 + 2 * r)
         init_ab, init_out = _window_rows(ya, h, r), _window_rows(y0, h, r)
-        p, q = np.empty((yq - yp, w), f32), np.empty((yq - yp, w), f32)
-        a, b = np.empty((yb - ya, w), f32), np.empty((yb - ya, w), f32)
-        colcnt = np.empty(w, f32)
+        # one plane per side
+        two = len(sides) == 2
+        p, q = np.empty((2, yq - yp, w), f32), np.empty((2, yq - yp, w), f32)
+        a, b = np.empty((2, yb - ya, w), f32), np.empty((2, yb - ya, w), f32)
+        colcnt = np.empty((2, w), f32)
         # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
         buf = np.empty((y1 - y0, w, min(_CHUNK, n)), f32)
         idx, state = _nb_wta_state((y1 - y0, w), m)  # the strip's own (first touched by its thread)
@@ -314,9 +316,9 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
             count = min(buf.shape[2], n - j0)
             for jj in range(count):
                 for si, ks in enumerate(sides):
-                    _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p, q, colcnt, yp, yq)
-                    _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya)
-                    _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, si == 0, y0, y1, ya)
+                    _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p[si], q[si], colcnt[si], yp, yq)
+                _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya, two)
+                _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, y0, y1, ya, two)
             _nb_wta_chunk(buf, count, j0, m, idx, state)
         for o, v in zip(out, _nb_wta_result(idx, state, candidates, step, m, exclude_px)):
             o[y0:y1] = v
@@ -481,60 +483,106 @@ if _njit is not None:
         return sa, sb
 
     @_jit
-    def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, y_lo, y_hi, src_off, dst_off):
-        """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` (float64 running sums).
+    def _nb_box_coeffs(p, q, mi, inv, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, y_lo, y_hi, src_off, dst_off, two):
+        """Guided-filter coefficients ``a = (box(q) - mi box(p)) inv``, ``b = box(p) - a mi`` of both sides (float64 running sums).
 
-        Image rows ``y_lo .. y_hi - 1``; ``init_r`` are the (reflected) image
-        rows of ``y_lo``'s window. Image row ``y`` is row ``y - src_off`` of
-        ``p``, ``q`` and row ``y - dst_off`` of ``a``, ``b``.
+        ``p``, ``q``, ``a``, ``b`` hold one plane per side; plane 1 is used
+        only if ``two``. The two sides' running sums are independent chains
+        in one loop, which hides the latency of each. Image rows ``y_lo ..
+        y_hi - 1``; ``init_r`` are the (reflected) image rows of ``y_lo``'s
+        window. Image row ``y`` is row ``y - src_off`` of ``p``, ``q`` and row
+        ``y - dst_off`` of ``a``, ``b``.
         """
-        w = p.shape[1]
-        colp = np.empty(w, np.float64)
-        colq = np.empty(w, np.float64)
-        _nb_columns_init(p, q, init_r, src_off, colp, colq)
+        w = p.shape[2]
+        p0, q0, p1, q1 = p[0], q[0], p[1], q[1]
+        colp0 = np.empty(w, np.float64)
+        colq0 = np.empty(w, np.float64)
+        colp1 = np.empty(w, np.float64)
+        colq1 = np.empty(w, np.float64)
+        _nb_columns_init(p0, q0, init_r, src_off, colp0, colq0)
+        if two:
+            _nb_columns_init(p1, q1, init_r, src_off, colp1, colq1)
         for y in range(y_lo, y_hi):
-            sp, sq = _nb_row_start(colp, colq, init_c)
+            sp0, sq0 = _nb_row_start(colp0, colq0, init_c)
+            sp1, sq1 = _nb_row_start(colp1, colq1, init_c) if two else (0.0, 0.0)
             mir = mi[y]
             invr = inv[y]
-            ar = a[y - dst_off]
-            br = b[y - dst_off]
+            a0 = a[0, y - dst_off]
+            b0 = b[0, y - dst_off]
+            a1 = a[1, y - dst_off]
+            b1 = b[1, y - dst_off]
             for x in range(w):
-                mp = np.float32(sp * inv_area)
-                mq = np.float32(sq * inv_area)
-                av = (mq - mir[x] * mp) * invr[x]
-                ar[x] = av
-                br[x] = mp - av * mir[x]
-                sp += colp[add_c[x]] - colp[sub_c[x]]
-                sq += colq[add_c[x]] - colq[sub_c[x]]
+                m = mir[x]
+                iv = invr[x]
+                mp = np.float32(sp0 * inv_area)
+                mq = np.float32(sq0 * inv_area)
+                av = (mq - m * mp) * iv
+                a0[x] = av
+                b0[x] = mp - av * m
+                xa = add_c[x]
+                xs = sub_c[x]
+                sp0 += colp0[xa] - colp0[xs]
+                sq0 += colq0[xa] - colq0[xs]
+                if two:
+                    mp = np.float32(sp1 * inv_area)
+                    mq = np.float32(sq1 * inv_area)
+                    av = (mq - m * mp) * iv
+                    a1[x] = av
+                    b1[x] = mp - av * m
+                    sp1 += colp1[xa] - colp1[xs]
+                    sq1 += colq1[xa] - colq1[xs]
             if y + 1 < y_hi:
-                _nb_columns_step(p, q, add_r[y] - src_off, sub_r[y] - src_off, colp, colq)
+                _nb_columns_step(p0, q0, add_r[y] - src_off, sub_r[y] - src_off, colp0, colq0)
+                if two:
+                    _nb_columns_step(p1, q1, add_r[y] - src_off, sub_r[y] - src_off, colp1, colq1)
 
     @_jit
-    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, first, y_lo, y_hi, src_off):
-        """Guided-filter output ``box(a) guide + box(b)`` (inf in columns no view covers) into ``out[:, :, plane]``, or its minimum with it.
+    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, y_lo, y_hi, src_off, two):
+        """The better side's guided-filter output ``box(a) guide + box(b)`` (inf in columns its views miss) into ``out[:, :, plane]``.
 
-        Image rows ``y_lo .. y_hi - 1`` (row ``y - y_lo`` of ``out``); image
-        row ``y`` is row ``y - src_off`` of ``a`` and ``b``.
+        Both sides in one loop (as :func:`_nb_box_coeffs`; side 1 only if
+        ``two``); side 1 wins only where its cost is lower. Image rows ``y_lo .. y_hi - 1`` (row ``y -
+        y_lo`` of ``out``); image row ``y`` is row ``y - src_off`` of ``a``
+        and ``b``.
         """
-        w = a.shape[1]
-        cola = np.empty(w, np.float64)
-        colb = np.empty(w, np.float64)
+        w = a.shape[2]
+        a0, b0, a1, b1 = a[0], b[0], a[1], b[1]
+        cnt0, cnt1 = colcnt[0], colcnt[1]
+        cola0 = np.empty(w, np.float64)
+        colb0 = np.empty(w, np.float64)
+        cola1 = np.empty(w, np.float64)
+        colb1 = np.empty(w, np.float64)
         inf = np.float32(np.inf)
-        _nb_columns_init(a, b, init_r, src_off, cola, colb)
+        _nb_columns_init(a0, b0, init_r, src_off, cola0, colb0)
+        if two:
+            _nb_columns_init(a1, b1, init_r, src_off, cola1, colb1)
         for y in range(y_lo, y_hi):
-            sa, sb = _nb_row_start(cola, colb, init_c)
+            sa0, sb0 = _nb_row_start(cola0, colb0, init_c)
+            sa1, sb1 = _nb_row_start(cola1, colb1, init_c) if two else (0.0, 0.0)
             gr = guide[y]
             orow = out[y - y_lo]
             for x in range(w):
-                v = np.float32(sa * inv_area) * gr[x] + np.float32(sb * inv_area)
-                if colcnt[x] == 0:
+                g = gr[x]
+                v = np.float32(sa0 * inv_area) * g + np.float32(sb0 * inv_area)
+                if cnt0[x] == 0:
                     v = inf
-                if first or v < orow[x, plane]:
-                    orow[x, plane] = v
-                sa += cola[add_c[x]] - cola[sub_c[x]]
-                sb += colb[add_c[x]] - colb[sub_c[x]]
+                xa = add_c[x]
+                xs = sub_c[x]
+                sa0 += cola0[xa] - cola0[xs]
+                sb0 += colb0[xa] - colb0[xs]
+                if two:
+                    v1 = np.float32(sa1 * inv_area) * g + np.float32(sb1 * inv_area)
+                    if cnt1[x] == 0:
+                        v1 = inf
+                    if v1 < v:
+                        v = v1
+                    sa1 += cola1[xa] - cola1[xs]
+                    sb1 += colb1[xa] - colb1[xs]
+                orow[x, plane] = v
             if y + 1 < y_hi:
-                _nb_columns_step(a, b, add_r[y] - src_off, sub_r[y] - src_off, cola, colb)
+                _nb_columns_step(a0, b0, add_r[y] - src_off, sub_r[y] - src_off, cola0, colb0)
+                if two:
+                    _nb_columns_step(a1, b1, add_r[y] - src_off, sub_r[y] - src_off, cola1, colb1)
 
     @_jit
     def _nb_wta_chunk(chunk, count, j0, m, idx, state):
