@@ -450,3 +450,15 @@ def test_refine_edges_centre_stencil_equals_full_gradients():
     mx = patches.map_x
     np.testing.assert_array_equal(inside, ((mx >= -0.5) & (mx <= SHAPE[1] - 0.5)).all(axis=(1, 3)).ravel()[:n])
     assert 0 < inside.sum() < n
+
+
+def test_cached_reference_nodes_equal_the_pair_stencil():
+    """The level's cached reference half of the pair stencil is what gradients() computes for it."""
+    from nfdepth.normal_flow import gradients
+    from nfdepth.stereo import _ReferenceNodes
+
+    ref = _ReferenceNodes.of(TEXTURE.astype(np.float32))
+    assert ref.nodes.shape == (SHAPE[0] + 1, SHAPE[1] + 1)
+    pair = gradients([ref.nodes, ref.nodes], frame_interval=1.0, stencil="matched")
+    np.testing.assert_array_equal(ref.grad_col, pair.grad_col)
+    np.testing.assert_array_equal(ref.grad_row, pair.grad_row)

@@ -151,11 +151,21 @@ def _diff_col(image: np.ndarray, matched: bool) -> np.ndarray:
     return 0.75 * two_point + (1.0 / 12.0) * wide
 
 
+def _diff_row(image: np.ndarray, matched: bool) -> np.ndarray:
+    """Difference along rows at half-integer rows, shape (H-1, W): :func:`_diff_col` of the transpose, transposed back."""
+    two_point = image[1:] - image[:-1]
+    if not matched:
+        return two_point
+    padded = np.pad(image, ((1, 1), (0, 0)), mode="edge")
+    wide = padded[3:] - padded[:-3]
+    return 0.75 * two_point + (1.0 / 12.0) * wide
+
+
 def _cell_gradient(image: np.ndarray, matched: bool) -> tuple[np.ndarray, np.ndarray]:
     """``(I_col, I_row)`` of one frame at the 2 x 2 cell centres."""
     dc = _diff_col(image, matched)
     grad_col = 0.5 * (dc[:-1] + dc[1:])
-    dr = _diff_col(image.T, matched).T
+    dr = _diff_row(image, matched)
     grad_row = 0.5 * (dr[:, :-1] + dr[:, 1:])
     return grad_col, grad_row
 

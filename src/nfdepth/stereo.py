@@ -134,7 +134,7 @@ from ._cost_volume import _box, _match_features, best_disparity
 from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
-from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients
+from .normal_flow import GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
 
 __all__ = ["StereoResult", "static_stereo", "auto_levels"]
 
@@ -449,14 +449,36 @@ def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
     return out
 
 
-def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True) -> _Measurement:
-    """Warp every view with ``d_pix`` and fit the intensity-vs-position slope per pixel."""
+@dataclass
+class _ReferenceNodes:
+    """The reference sampled on the node grid and its cell gradients: fixed per pyramid level."""
+
+    nodes: np.ndarray  # (H+1, W+1)
+    grad_col: np.ndarray  # (H, W)
+    grad_row: np.ndarray
+
+    @classmethod
+    def of(cls, smoothed_ref: np.ndarray) -> _ReferenceNodes:
+        h, w = smoothed_ref.shape
+        map_x = np.broadcast_to((np.arange(w + 1, dtype=np.float32) - 0.5)[None, :], (h + 1, w + 1)).astype(np.float32)
+        map_y = np.broadcast_to((np.arange(h + 1, dtype=np.float32) - 0.5)[:, None], (h + 1, w + 1)).astype(np.float32)
+        nodes = cv2.remap(smoothed_ref, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return cls(nodes, *_cell_gradient(nodes, True))
+
+
+def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True, reference=None) -> _Measurement:
+    """Warp every view with ``d_pix`` and fit the intensity-vs-position slope per pixel.
+
+    ``reference``: the level's :class:`_ReferenceNodes` (computed when not given).
+    """
     h, w = d_pix.shape
     rows = (np.arange(h + 1, dtype=np.float32) - 0.5)[:, None]
     cols = (np.arange(w + 1, dtype=np.float32) - 0.5)[None, :]
     d_nodes = _nodes_from_pixels(d_pix).astype(np.float32)
     map_y = np.broadcast_to(rows, (h + 1, w + 1)).astype(np.float32)
-    ref_nodes = cv2.remap(smoothed[ref], np.broadcast_to(cols, (h + 1, w + 1)).astype(np.float32), map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if reference is None:
+        reference = _ReferenceNodes.of(smoothed[ref])
+    ref_nodes = reference.nodes
     n = len(smoothed)
     diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
     for k in range(n):
@@ -466,9 +488,13 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True) -> _Meas
         warped = cv2.remap(smoothed[k], map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         inside_nodes = (map_x >= -0.5) & (map_x <= w - 0.5)
         inside[k] = (inside_nodes[:-1, :-1] & inside_nodes[:-1, 1:] & inside_nodes[1:, :-1] & inside_nodes[1:, 1:]).astype(np.float32)
-        # Paper section 3.1 stencil on the pair (reference, view k): grad_t * 1 = cell mean of W_k - W_ref
-        pair = gradients([ref_nodes, warped], frame_interval=1.0, stencil="matched")
-        diffs[k], gcs[k], grs[k] = pair.grad_t, pair.grad_col, pair.grad_row
+        # Paper section 3.1 stencil on the pair (reference, view k), as
+        # gradients([ref_nodes, warped]) with the reference's half cached:
+        # grad_t * 1 = cell mean of W_k - W_ref
+        gc_k, gr_k = _cell_gradient(warped, True)
+        diffs[k] = _cell_mean(warped - ref_nodes)
+        gcs[k] = 0.5 * (reference.grad_col + gc_k)
+        grs[k] = 0.5 * (reference.grad_row + gr_k)
     weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px) if robust else inside
     slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, weights)
     wsum = np.zeros((h, w), np.float32)
@@ -878,6 +904,7 @@ def static_stereo(
     guide = [(gaussian_smooth(lv, sigma_px=0.5) - np.float32(p1)) / np.float32(max(spread, 1e-6)) for lv in pyramids[ref]]
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
+        reference_nodes = _ReferenceNodes.of(smoothed[ref])
         s_c = noise_floor * _PYRDOWN_NOISE**level * gain  # noise std of one cell value
         if level < levels - 1:
             h, w = smoothed[0].shape
@@ -891,7 +918,7 @@ def static_stereo(
         # search range, which the next coarser level gives as well (+-2 px margin).
         skip = cost_volume and level == 0 and levels > 1
         for _ in range(0 if skip else int(iterations_per_level)):
-            m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+            m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
             num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
             den = _blur(info, dense_window_px)
@@ -944,14 +971,14 @@ def static_stereo(
             d_discrete = d
             reach = 0.5 * step if (cost_volume and level == 0) else 0.5 * int(polish_iterations)
             for _ in range(int(polish_iterations)):
-                m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+                m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
                 info = m.grad_col**2 * m.s_tt
                 with np.errstate(divide="ignore", invalid="ignore"):
                     delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, polish_radius, guided_eps)
                 delta = np.where(np.isfinite(delta), np.clip(delta, -0.5, 0.5), 0.0).astype(np.float32)
                 d = np.clip(d + delta, d_discrete - reach, d_discrete + reach).astype(np.float32)
     # final measurement at the finest level for validity, edges and uncertainty
-    m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px)
+    m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
     field = GradientField(m.grad_col, m.grad_row, m.slope)
     selection = select_edge_points(field, m.ref_nodes, min_gradient=min_gradient, max_corner_ratio=max_corner_ratio, corner_window_px=max(sigma_px, 1.0))
     edge_mask = selection.mask
