@@ -52,7 +52,7 @@ except ImportError:  # pragma: no cover - depends on the environment
     _njit = None
 
 _CHUNK = 8  # candidates per winner-take-all update of the numba path
-_MIN_STRIP_ROWS = 200  # rows per strip of the numba path (see _row_strips)
+_MIN_STRIP_ROWS = 128  # rows per strip of the numba path (see _row_strips)
 _MAX_STRIPS = 16
 
 
