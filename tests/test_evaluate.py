@@ -10,7 +10,7 @@ from scipy import ndimage
 from nfdepth import baselines
 from nfdepth.cli import main
 from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
-from nfdepth.evaluate import disparity_errors, error_map_png, evaluate_scene, render_markdown, resolve_dataset, select_views
+from nfdepth.evaluate import disparity_errors, error_map_png, evaluate_scene, evaluation_rows, render_markdown, resolve_dataset, select_views
 
 
 def run_cli(capsys, *argv):
@@ -174,7 +174,7 @@ def test_evaluate_scene_shape_and_table(tmp_path):
     png = error_map_png(tmp_path / "e.png", res["maps"]["sgbm"], res["truth"])
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     only = evaluate_scene(_synthetic_scene(), views="three", methods=["sgbm"])
-    assert only["methods"]["sgbm"]["edges"] is None
+    assert only["methods"]["sgbm"]["edges"] is None and "nfdepth_at_shared_edges" not in only["methods"]["sgbm"]
     with pytest.raises(ValueError, match="methods"):
         evaluate_scene(_synthetic_scene(), methods=["magic"])
 
@@ -234,10 +234,41 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     assert res["scene"] == "tsukuba" and res["views"] == [1, 2, 3] and res["shape"] == [288, 384]
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
     keys = {"points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px"}
-    for entry in res["methods"].values():
-        assert set(entry) == {"runtime_s", "edges", "dense"}
+    for name, entry in res["methods"].items():
+        assert set(entry) == {"runtime_s", "edges", "dense"} | (set() if name == "nfdepth" else {"nfdepth_at_shared_edges"})
         assert set(entry["edges"]) == keys and set(entry["dense"]) == keys
         assert 0 < entry["dense"]["density"] <= 1
         # every method is far better than chance on Tsukuba (disparity 5..14 px)
         assert entry["dense"]["median_rel"] < 0.1
     assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3
+
+
+def test_nfdepth_is_also_scored_on_the_points_a_peer_shares(monkeypatch):
+    """Where a peer leaves some of nfdepth's edge points without a value, nfdepth is scored on exactly the rest too."""
+    from nfdepth import evaluate
+
+    real = evaluate._run_peer
+
+    def holes(method, scene, max_disp):
+        r = real(method, scene, max_disp)
+        if method == "sgbm":  # no value in the top rows, as a peer rejecting its unsure matches
+            r.disparity[:15] = np.nan
+        return r
+
+    monkeypatch.setattr(evaluate, "_run_peer", holes)
+    res = evaluate_scene(_synthetic_scene(), views="three", methods=("nfdepth", "sgbm", "waxman_sinha"), keep_maps=True)
+    edges = res["edge_points"]
+    truth = res["truth"]
+    for peer in ("sgbm", "waxman_sinha"):
+        shared = res["methods"][peer]["nfdepth_at_shared_edges"]
+        mask = edges & np.isfinite(res["maps"][peer])
+        assert shared == disparity_errors(res["maps"]["nfdepth"], truth, mask=mask)
+        assert shared["points"] == res["methods"][peer]["edges"]["points"]
+    n_edges = res["methods"]["nfdepth"]["edges"]["points"]
+    assert 0 < res["methods"]["sgbm"]["nfdepth_at_shared_edges"]["points"] < n_edges
+    assert res["methods"]["waxman_sinha"]["nfdepth_at_shared_edges"]["points"] == n_edges
+    # a row for the smaller shared set, right after the peer's own edge row; none for a full one
+    labels = [(m, label) for m, label, _, _ in evaluation_rows(res)]
+    assert labels.index(("nfdepth", "edges & sgbm")) == labels.index(("sgbm", "at nfdepth edges")) + 1
+    assert ("nfdepth", "edges & waxman_sinha") not in labels
+    assert "nfdepth (edges & sgbm)" in render_markdown(res)

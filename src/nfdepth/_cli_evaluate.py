@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .evaluate import DEFAULT_METHODS, METHODS
+from .evaluate import DEFAULT_METHODS, METHODS, evaluation_rows
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -68,16 +68,12 @@ def _fmt_table(res) -> str:
         + f", {res['truth_points']} ground-truth pixels",
         f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} {'runtime':>8}",
     ]
-    for method, entry in res["methods"].items():
-        for part in ("edges", "dense"):
-            e = entry.get(part)
-            if e is None:
-                continue
-            label = f"{method} ({'edges' if method == 'nfdepth' else 'at nfdepth edges'})" if part == "edges" else f"{method} (dense)"
-            lines.append(
-                f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e['p90_rel'], 2):>7} "
-                f"{pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} {entry['runtime_s']:>7.3f}s"
-            )
+    for method, label, e, runtime_s in evaluation_rows(res):
+        label = f"{method} ({label})"
+        lines.append(
+            f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e['p90_rel'], 2):>7} "
+            f"{pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} {runtime_s:>7.3f}s"
+        )
     return "\n".join(lines)
 
 

@@ -14,6 +14,11 @@ What is compared
 * ``nfdepth`` **dense**: every finite pixel of ``StereoResult.disparity``.
 * each peer **at nfdepth's edge points** (the same pixels; ``density`` is the
   share of those points where the peer gives a value) and **dense**.
+* ``nfdepth`` **at the edge points a peer shares** (``"nfdepth_at_shared_edges"``
+  of the peer; printed as ``nfdepth (edges & PEER)`` when it is fewer points
+  than all of nfdepth's): both on exactly the same points, since a peer
+  that leaves the hard points out (SGBM's uniqueness and left-right tests)
+  is otherwise scored on easier ones.
 
 Peers (see :mod:`nfdepth.baselines`): ``sgbm`` (OpenCV semi-global matching
 on the reference and its neighbour, one step of baseline; ``numDisparities``
@@ -38,6 +43,7 @@ __all__ = [
     "evaluate_scene",
     "resolve_dataset",
     "evaluate_dataset",
+    "evaluation_rows",
     "render_markdown",
     "error_map_png",
     "to_jsonable",
@@ -188,7 +194,10 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         ``reference_index`` (into the row), ``downsample``, ``shape``,
         ``truth_points`` and ``methods``: method -> ``{"runtime_s",
         "dense": errors, "edges": errors or None}`` (errors as
-        :func:`disparity_errors`).
+        :func:`disparity_errors`); a peer scored at nfdepth's edge points also
+        has ``"nfdepth_at_shared_edges"``: nfdepth's errors at those of its
+        edge points where the peer has a value (the same points as the peer's
+        ``"edges"`` figures).
     """
     from . import datasets
     from .stereo import static_stereo
@@ -241,6 +250,11 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
             "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points),
             "dense": disparity_errors(r.disparity, truth),
         }
+        if edge_points is not None:
+            # nfdepth on exactly the edge points where the peer has a value too:
+            # the same point set on both sides (a peer may leave the hard ones out)
+            shared = edge_points & np.isfinite(np.asarray(r.disparity, dtype=np.float64))
+            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared)
         maps[m] = r.disparity
     if keep_maps:
         out["maps"] = maps
@@ -353,14 +367,23 @@ def _rel(x) -> str:
     return "–" if x is None or not np.isfinite(x) else f"{100 * x:.2f} %"
 
 
-def _rows(result):
-    for method, entry in result["methods"].items():
+def evaluation_rows(result):
+    """The rows of the tables of one :func:`evaluate_scene` result: ``(method, label, errors, runtime_s)``.
+
+    A peer that leaves some of nfdepth's edge points without a value gets a
+    row of nfdepth at the points they share, right after its own edge row.
+    """
+    methods = result["methods"]
+    for method, entry in methods.items():
         for part in ("edges", "dense"):
             errs = entry.get(part)
             if errs is None:
                 continue
             label = "edges" if method == "nfdepth" and part == "edges" else ("at nfdepth edges" if part == "edges" else "dense")
             yield method, label, errs, entry["runtime_s"]
+            shared = entry.get("nfdepth_at_shared_edges") if part == "edges" else None
+            if shared is not None and shared["points"] < methods["nfdepth"]["edges"]["points"]:
+                yield "nfdepth", f"edges & {method}", shared, methods["nfdepth"]["runtime_s"]
 
 
 def render_markdown(results) -> str:
@@ -374,7 +397,7 @@ def render_markdown(results) -> str:
     lines = [head]
     for res in results:
         size = f" /{res['downsample']}" if res.get("downsample", 1) > 1 else ""
-        for method, label, e, rt in _rows(res):
+        for method, label, e, rt in evaluation_rows(res):
             lines.append(
                 f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
                 f"{_rel(e['median_rel'])} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | {_pct(e['bad_0_5px'])} | "
