@@ -453,6 +453,25 @@ def views_on_disk(tmp_path):
     return paths
 
 
+def test_cli_stereo_threads_do_not_change_the_output(tmp_path, capfd):
+    """--threads sets the cost volume's threads; its row strips (two at 300 rows) are fixed, so the bytes are the same."""
+    from nfdepth._cost_volume import _row_strips
+
+    assert len(_row_strips(300, 9)) == 2
+    views = []
+    for k in range(3):
+        p = tmp_path / f"t{k}.png"
+        cv2.imwrite(str(p), np.clip(_texture((300, 96), shift=1.5 * k), 0, 255).astype(np.uint8))
+        views.append(p)
+    outs = []
+    for threads in ("1", "2"):
+        out = tmp_path / f"d{threads}.pfm"
+        code, _, err = run_cli(capfd, "stereo", *views, "--out", out, "--threads", threads)
+        assert code == 0, err
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1]
+
+
 def run_cli(capfd, *argv):
     code = main([str(a) for a in argv])
     out, err = capfd.readouterr()
@@ -478,6 +497,7 @@ def _cli_cases(tmp: Path, v):
         ("focal without baseline", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10"], 2, "--focal-px and --baseline go together"),
         ("ply without depth", ["stereo", v0, v1, v2, "--out", out, "--ply", str(tmp / "p.ply")], 2, "--ply needs --focal-px and --baseline"),
         ("reference range", ["stereo", v0, v1, v2, "--out", out, "--reference", "3"], 2, "--reference must index one of the 3 views (0..2), got 3"),
+        ("stereo threads", ["stereo", v0, v1, v2, "--out", out, "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
         ("reference text", ["stereo", v0, v1, v2, "--out", out, "--reference", "x"], 2, "argument --reference: invalid int value: 'x'"),
         ("positions count", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1"], 2, "positions must hold one number per view (3)"),
         ("views wrong order", ["stereo", v0, v1, v2, "--out", out, "--positions", "2", "1", "0"], 2, "positions must be strictly increasing"),

@@ -320,6 +320,8 @@ def _cmd_stereo(args) -> int:
         raise CLIError("--focal-px and --baseline go together: give both for depth output, or neither for disparity")
     if args.ply and focal is None:
         raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
+    if args.threads is not None and args.threads < 1:
+        raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
@@ -348,6 +350,8 @@ def _cmd_stereo(args) -> int:
         options["sigma_px"] = args.sigma_px
     if args.levels is not None:
         options["levels"] = args.levels
+    if args.threads is not None:
+        options["threads"] = args.threads
     result = static_stereo(
         views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
     )
@@ -454,6 +458,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (px or scene units); with --uncertainty also PNG_std.png")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
     p.add_argument("--levels", type=int, help="pyramid levels (default: from the image size)")
+    p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions (docs/rig-format.md)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
