@@ -48,8 +48,9 @@ and thread counts): one pass over the cell grid (combined stencils, ``I_t``,
 ``|grad I|``, ``vn``, Laplacian signs in cv2's own summation order, the list
 of zero-crossing cells), then, after the percentile (exact, as
 ``np.percentile``), the block tensor (its block means accumulated in the
-cell-grid pass, ``cv2.sepFilter2D`` for the window) and one pass over the candidates: strong
-test, bilinear read-back, eigenvalue test (float64, branch-free), with the
+cell-grid pass, ``cv2.sepFilter2D`` for the window), a branch-free compaction of
+the strong candidates and one pass over them: bilinear read-back,
+eigenvalue test (float64, branch-free), with the
 accepted points' gradients packed for NumPy's SIMD float32 ``atan2`` (the
 reference's own; a scalar call costs ~25 ns a point). The percentile's top
 values are collected by a compiled loop. It blurs the three frames separately (3 Gaussian passes), so
