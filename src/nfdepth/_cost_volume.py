@@ -473,6 +473,26 @@ if _njit is not None:
             col_b[c] += np.float64(b[y_add, c]) - np.float64(b[y_sub, c])
 
     @_jit_inline
+    def _nb_columns_init_sides(a, b, rows, off, two):
+        """Column sums of ``a`` and ``b`` (planes: sides; side 1 only if ``two``) over the image ``rows`` of the first window."""
+        w = a.shape[2]
+        col_a0 = np.empty(w, np.float64)
+        col_b0 = np.empty(w, np.float64)
+        col_a1 = np.empty(w, np.float64)
+        col_b1 = np.empty(w, np.float64)
+        _nb_columns_init(a[0], b[0], rows, off, col_a0, col_b0)
+        if two:
+            _nb_columns_init(a[1], b[1], rows, off, col_a1, col_b1)
+        return col_a0, col_b0, col_a1, col_b1
+
+    @_jit_inline
+    def _nb_columns_step_sides(a, b, y_add, y_sub, col_a0, col_b0, col_a1, col_b1, two):
+        """:func:`_nb_columns_step` of both sides (side 1 only if ``two``)."""
+        _nb_columns_step(a[0], b[0], y_add, y_sub, col_a0, col_b0)
+        if two:
+            _nb_columns_step(a[1], b[1], y_add, y_sub, col_a1, col_b1)
+
+    @_jit_inline
     def _nb_row_start(col_a, col_b, cols):
         """Box sums of the first window of a row from the column sums."""
         sa = 0.0
@@ -494,14 +514,7 @@ if _njit is not None:
         ``y - dst_off`` of ``a``, ``b``.
         """
         w = p.shape[2]
-        p0, q0, p1, q1 = p[0], q[0], p[1], q[1]
-        colp0 = np.empty(w, np.float64)
-        colq0 = np.empty(w, np.float64)
-        colp1 = np.empty(w, np.float64)
-        colq1 = np.empty(w, np.float64)
-        _nb_columns_init(p0, q0, init_r, src_off, colp0, colq0)
-        if two:
-            _nb_columns_init(p1, q1, init_r, src_off, colp1, colq1)
+        colp0, colq0, colp1, colq1 = _nb_columns_init_sides(p, q, init_r, src_off, two)
         for y in range(y_lo, y_hi):
             sp0, sq0 = _nb_row_start(colp0, colq0, init_c)
             sp1, sq1 = _nb_row_start(colp1, colq1, init_c) if two else (0.0, 0.0)
@@ -532,9 +545,7 @@ if _njit is not None:
                     sp1 += colp1[xa] - colp1[xs]
                     sq1 += colq1[xa] - colq1[xs]
             if y + 1 < y_hi:
-                _nb_columns_step(p0, q0, add_r[y] - src_off, sub_r[y] - src_off, colp0, colq0)
-                if two:
-                    _nb_columns_step(p1, q1, add_r[y] - src_off, sub_r[y] - src_off, colp1, colq1)
+                _nb_columns_step_sides(p, q, add_r[y] - src_off, sub_r[y] - src_off, colp0, colq0, colp1, colq1, two)
 
     @_jit
     def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, y_lo, y_hi, src_off, two):
@@ -546,16 +557,9 @@ if _njit is not None:
         and ``b``.
         """
         w = a.shape[2]
-        a0, b0, a1, b1 = a[0], b[0], a[1], b[1]
         cnt0, cnt1 = colcnt[0], colcnt[1]
-        cola0 = np.empty(w, np.float64)
-        colb0 = np.empty(w, np.float64)
-        cola1 = np.empty(w, np.float64)
-        colb1 = np.empty(w, np.float64)
         inf = np.float32(np.inf)
-        _nb_columns_init(a0, b0, init_r, src_off, cola0, colb0)
-        if two:
-            _nb_columns_init(a1, b1, init_r, src_off, cola1, colb1)
+        cola0, colb0, cola1, colb1 = _nb_columns_init_sides(a, b, init_r, src_off, two)
         for y in range(y_lo, y_hi):
             sa0, sb0 = _nb_row_start(cola0, colb0, init_c)
             sa1, sb1 = _nb_row_start(cola1, colb1, init_c) if two else (0.0, 0.0)
@@ -580,9 +584,7 @@ if _njit is not None:
                     sb1 += colb1[xa] - colb1[xs]
                 orow[x, plane] = v
             if y + 1 < y_hi:
-                _nb_columns_step(a0, b0, add_r[y] - src_off, sub_r[y] - src_off, cola0, colb0)
-                if two:
-                    _nb_columns_step(a1, b1, add_r[y] - src_off, sub_r[y] - src_off, cola1, colb1)
+                _nb_columns_step_sides(a, b, add_r[y] - src_off, sub_r[y] - src_off, cola0, colb0, cola1, colb1, two)
 
     @_jit
     def _nb_wta_chunk(chunk, count, j0, m, idx, state):

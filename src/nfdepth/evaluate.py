@@ -16,9 +16,10 @@ What is compared
   share of those points where the peer gives a value) and **dense**.
 * ``nfdepth`` **at the edge points a peer shares** (``"nfdepth_at_shared_edges"``
   of the peer; printed as ``nfdepth (edges & PEER)`` when it is fewer points
-  than all of nfdepth's): both on exactly the same points, since a peer
-  that leaves the hard points out (SGBM's uniqueness and left-right tests)
-  is otherwise scored on easier ones.
+  than all of nfdepth's): both on exactly the same points. A peer that
+  gives no value at some of them (SGBM's uniqueness, left-right and speckle
+  tests, the border its disparity range cannot reach) is otherwise scored
+  on another point set than nfdepth.
 
 Peers (see :mod:`nfdepth.baselines`): ``sgbm`` (OpenCV semi-global matching
 on the reference and its neighbour, one step of baseline; ``numDisparities``
