@@ -332,7 +332,7 @@ def test_streaming_wta_matches_full_volume():
 @pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
 def test_numba_streaming_wta_matches_full_volume():
     """The fused winner-take-all (chunks of candidates, state in locals) equals the full-volume one."""
-    from nfdepth._cost_volume import _nb_streaming_wta, _wta_subpixel
+    from nfdepth._cost_volume import _nb_wta_chunk, _nb_wta_result, _nb_wta_state, _window_half, _wta_subpixel
 
     rng = np.random.default_rng(1)
     for n, step, k in ((40, 0.5, 8), (7, 0.5, 3), (2, 0.5, 8), (1, 0.5, 8), (30, 0.7, 4), (25, 0.3, 8)):
@@ -343,8 +343,12 @@ def test_numba_streaming_wta_matches_full_volume():
         d, c0, _ = _wta_subpixel(vol, cand)
         near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
         c2 = np.min(np.where(near, np.inf, vol), axis=0)
-        chunks = ((np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, -1)), len(vol[j : j + k])) for j in range(0, n, k))
-        d_s, c0_s, c2_s = _nb_streaming_wta(chunks, cand, vol.shape[1:], exclude_px=1.0)
+        m, step = _window_half(cand, 1.0)
+        idx, state = _nb_wta_state(vol.shape[1:], m)
+        for j in range(0, n, k):
+            chunk = np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, -1))
+            _nb_wta_chunk(chunk, chunk.shape[2], j, m, idx, state)
+        d_s, c0_s, c2_s = _nb_wta_result(idx, state, cand, step, m, 1.0)
         np.testing.assert_array_equal(d_s, d)
         np.testing.assert_array_equal(c0_s, c0)
         np.testing.assert_array_equal(c2_s, c2)

@@ -354,22 +354,9 @@ def _nb_wta_state(shape, m):
 
 
 def _nb_wta_result(idx, state, candidates, step, m, exclude_px):
+    """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (see :func:`_wta_finish`)."""
     win = [state[:, :, 3 + k] for k in range(2 * m - 1)]
     return _wta_finish(idx, state[:, :, 0].copy(), win, state[:, :, 2], candidates, step, m, exclude_px)
-
-
-def _nb_streaming_wta(chunks, candidates, shape, *, exclude_px):
-    """:func:`_streaming_wta` over chunks ``(buf, count)``: ``buf[:, :, :count]`` holds the next ``count`` slices."""
-    m, step = _window_half(candidates, exclude_px)
-    idx, state = _nb_wta_state(shape, m)
-    j0 = 0
-    for buf, count in chunks:
-        _nb_wta_chunk(buf, count, j0, m, idx, state)
-        j0 += count
-    if j0 == 0:
-        msg = "no cost slices"
-        raise ValueError(msg)
-    return _nb_wta_result(idx, state, candidates, step, m, exclude_px)
 
 
 def _box_index(n, r):
