@@ -154,13 +154,13 @@ def test_bad_input(frames, kwargs, exc, match):
 @pytest.mark.parametrize("matched", [True, False])
 @pytest.mark.parametrize("shape", [(2, 2), (3, 5), (37, 52)])
 def test_row_difference_is_the_transposed_column_difference(matched, shape):
-    """_diff_row works on rows directly; it must equal _diff_col on the transpose, bit for bit."""
-    from nfdepth.normal_flow import _diff_col, _diff_row
+    """The difference along rows works on rows directly; it must equal the column difference of the transpose, bit for bit."""
+    from nfdepth.normal_flow import _diff
 
     rng = np.random.default_rng(5)
     for dtype in (np.float32, np.float64):
         image = rng.normal(0.0, 40.0, shape).astype(dtype)
-        expected = _diff_col(image.T, matched).T
-        got = _diff_row(image, matched)
+        expected = _diff(image.T, matched, axis=1).T
+        got = _diff(image, matched, axis=0)
         assert got.dtype == expected.dtype
         np.testing.assert_array_equal(got, expected)

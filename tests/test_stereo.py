@@ -320,7 +320,7 @@ def test_streaming_wta_matches_full_volume():
         vol[:, :2] = np.inf  # pixels no view sees
         vol[rng.random(vol.shape) < 0.05] = np.inf
         cand = np.arange(n) * step + 1.0
-        d, c0, _ = _wta_subpixel(vol, cand)
+        d, c0 = _wta_subpixel(vol, cand)
         near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
         c2 = np.min(np.where(near, np.inf, vol), axis=0)
         d_s, c0_s, c2_s = _streaming_wta(iter(vol), cand, exclude_px=1.0)
@@ -340,7 +340,7 @@ def test_numba_streaming_wta_matches_full_volume():
         vol[:, :2] = np.inf
         vol[rng.random(vol.shape) < 0.05] = np.inf
         cand = np.arange(n) * step + 1.0
-        d, c0, _ = _wta_subpixel(vol, cand)
+        d, c0 = _wta_subpixel(vol, cand)
         near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
         c2 = np.min(np.where(near, np.inf, vol), axis=0)
         m, step = _window_half(cand, 1.0)

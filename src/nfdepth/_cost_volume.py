@@ -128,22 +128,28 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
         yield best
 
 
+def _candidate_step(candidates) -> float:
+    """Spacing of the equally spaced ``candidates`` (1 for a single one)."""
+    return float(candidates[1] - candidates[0]) if len(candidates) > 1 else 1.0
+
+
 def _wta_subpixel(vol, candidates):
-    """Winner-take-all over the cost volume with a sub-sample (equiangular) fit over its neighbours."""
+    """Winner-take-all over the whole cost volume with a sub-sample (equiangular) fit: ``(d, c_best)``.
+
+    The plain definition that the streamed versions are tested against.
+    """
     idx = np.argmin(vol, axis=0)
     n = len(candidates)
-    step = float(candidates[1] - candidates[0]) if n > 1 else 1.0
     c0 = np.take_along_axis(vol, idx[None], 0)[0]
     cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
     cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
-    d, curv = _v_fit(idx, c0, cm, cp, candidates, step)
-    return d, c0, curv
+    return _v_fit(idx, c0, cm, cp, candidates, _candidate_step(candidates)), c0
 
 
 def _v_fit(idx, c0, cm, cp, candidates, step):
+    """Sub-sample position of the winner ``idx`` from its cost ``c0`` and its neighbours' ``cm``, ``cp``."""
     n = len(candidates)
     with np.errstate(invalid="ignore", divide="ignore"):
-        curv = cm - 2.0 * c0 + cp
         # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
         # about its minimum, and a parabola would pull toward the samples
         # (Shimizu & Okutomi 2005)
@@ -151,12 +157,12 @@ def _v_fit(idx, c0, cm, cp, candidates, step):
         off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
     off = np.clip(np.nan_to_num(off), -0.5, 0.5)
     d = np.asarray(candidates, np.float32)[idx] + off * step
-    return d.astype(np.float32), curv
+    return d.astype(np.float32)
 
 
 def _window_half(candidates, exclude_px):
     """``m``: slices at least ``m`` from the winner are always more than ``exclude_px`` from its sub-sample position."""
-    step = float(candidates[1] - candidates[0]) if len(candidates) > 1 else 1.0
+    step = _candidate_step(candidates)
     return int(np.floor((exclude_px + 0.5 * step) / step)) + 1, step
 
 
@@ -166,7 +172,7 @@ def _wta_finish(idx, best, win, far, candidates, step, m, exclude_px):
     cand32 = np.asarray(candidates, np.float32)
     cm = np.where(idx > 0, win[m - 2], best) if m > 1 else best
     cp = np.where(idx < n - 1, win[m], best) if m > 1 else best
-    d, _ = _v_fit(idx, best, cm, cp, candidates, step)
+    d = _v_fit(idx, best, cm, cp, candidates, step)
     c_second = far.copy()
     for k in range(-(m - 1), m):
         jj = np.clip(idx + k, 0, n - 1)

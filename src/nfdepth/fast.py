@@ -92,7 +92,7 @@ import numpy as np
 
 from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite
 from .edges import _block_read_back, _corner_window_blocks
-from .normal_flow import _TEMPORAL_WEIGHTS, STENCILS
+from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
 
 try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
     from numba import njit as _njit
@@ -299,7 +299,7 @@ class _Kernels:
         w = _TEMPORAL_WEIGHTS[p.stencil]
         self.weights = tuple(float(x) for x in w)
         if p.stencil == "matched":
-            row = np.array([-1.0 / 12.0, -0.75, 0.75, 1.0 / 12.0])
+            row = np.array([-_MATCHED_WIDE, -_MATCHED_NEAR, _MATCHED_NEAR, _MATCHED_WIDE])
             self.anchor_shift = 1  # taps at c-1 .. c+2
         else:
             row = np.array([-1.0, 1.0])
@@ -313,7 +313,7 @@ class _Kernels:
         # numba path: float32 constants, as the reference's float32 arithmetic uses them
         f32 = np.float32
         self.nb_weights = tuple(f32(x) for x in w)
-        self.kc1, self.kc2 = f32(0.75), f32(1.0 / 12.0)
+        self.kc1, self.kc2 = f32(_MATCHED_NEAR), f32(_MATCHED_WIDE)
         self.matched = p.stencil == "matched"
         self.tdiv = f32(2.0 * p.frame_interval)
 

@@ -141,31 +141,32 @@ def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
     return cv2.GaussianBlur(image, (ksize, ksize), sigmaX=sigma_px, sigmaY=sigma_px, borderType=cv2.BORDER_REFLECT)
 
 
-def _diff_col(image: np.ndarray, matched: bool) -> np.ndarray:
-    """Difference along columns at half-integer columns, shape (H, W-1)."""
-    two_point = image[:, 1:] - image[:, :-1]
-    if not matched:
-        return two_point
-    padded = np.pad(image, ((0, 0), (1, 1)), mode="edge")
-    wide = padded[:, 3:] - padded[:, :-3]
-    return 0.75 * two_point + (1.0 / 12.0) * wide
+#: The matched stencil's four-point difference: ``NEAR (I[j+1] - I[j]) + WIDE (I[j+2] - I[j-1])``.
+_MATCHED_NEAR = 0.75
+_MATCHED_WIDE = 1.0 / 12.0
 
 
-def _diff_row(image: np.ndarray, matched: bool) -> np.ndarray:
-    """Difference along rows at half-integer rows, shape (H-1, W): :func:`_diff_col` of the transpose, transposed back."""
-    two_point = image[1:] - image[:-1]
+def _diff(image: np.ndarray, matched: bool, axis: int) -> np.ndarray:
+    """Difference along ``axis`` (1: columns, 0: rows) at its half-integer positions, edge-padded (no transposes)."""
+
+    def cut(start, stop):
+        return (slice(None),) * axis + (slice(start, stop),)
+
+    two_point = image[cut(1, None)] - image[cut(None, -1)]
     if not matched:
         return two_point
-    padded = np.pad(image, ((1, 1), (0, 0)), mode="edge")
-    wide = padded[3:] - padded[:-3]
-    return 0.75 * two_point + (1.0 / 12.0) * wide
+    pad = [(0, 0), (0, 0)]
+    pad[axis] = (1, 1)
+    padded = np.pad(image, pad, mode="edge")
+    wide = padded[cut(3, None)] - padded[cut(None, -3)]
+    return _MATCHED_NEAR * two_point + _MATCHED_WIDE * wide
 
 
 def _cell_gradient(image: np.ndarray, matched: bool) -> tuple[np.ndarray, np.ndarray]:
     """``(I_col, I_row)`` of one frame at the 2 x 2 cell centres."""
-    dc = _diff_col(image, matched)
+    dc = _diff(image, matched, axis=1)
     grad_col = 0.5 * (dc[:-1] + dc[1:])
-    dr = _diff_row(image, matched)
+    dr = _diff(image, matched, axis=0)
     grad_row = 0.5 * (dr[:, :-1] + dr[:, 1:])
     return grad_col, grad_row
 
