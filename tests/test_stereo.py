@@ -336,6 +336,21 @@ def test_edge_point_on_the_occluded_side_of_a_depth_step():
     assert not _occluded_side(np.full_like(d, 3.0), img, rows, cols, 0.5).any()
 
 
+def test_occluded_side_across_an_edge_along_its_normal():
+    from nfdepth.stereo import _occluded_side
+
+    # near side (d = 5) above, far side (d = 2) below, intensity edge between rows 4 and 5:
+    # a depth step across the baseline, which only the edge normal (1, 0) crosses
+    d = np.where(np.arange(10)[:, None] <= 4, 5.0, 2.0).repeat(3, axis=1).astype(np.float32)
+    img = np.where(np.arange(10)[:, None] <= 4, 100.0, 20.0).repeat(3, axis=1).astype(np.float32)
+    rows, cols = np.array([4, 5]), np.array([1, 1])
+    normal = (np.ones(2), np.zeros(2))
+    assert not _occluded_side(d, img, rows, cols, 0.5).any()
+    assert _occluded_side(d, img, rows, cols, 0.5, direction=normal).tolist() == [False, True]
+    # the normal's sign does not matter
+    assert _occluded_side(d, img, rows, cols, 0.5, direction=(-normal[0], normal[1])).tolist() == [False, True]
+
+
 def test_streaming_wta_matches_full_volume():
     """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones."""
     from nfdepth._cost_volume import _streaming_wta, _wta_subpixel
