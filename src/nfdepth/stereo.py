@@ -684,16 +684,9 @@ def _occluded_side(d, image, rows, cols, step_px, reach=_SIDE_REACH, direction=N
     edge normal); default the baseline, ``(0, 1)``.
     """
     h, w = d.shape
-    if direction is None:
-        cl = np.clip(cols - reach, 0, w - 1)
-        cr = np.clip(cols + reach, 0, w - 1)
-        rl = rr = rows
-    else:
-        dr_, dc_ = direction
-        rl = np.clip(np.rint(rows - reach * dr_).astype(np.intp), 0, h - 1)
-        rr = np.clip(np.rint(rows + reach * dr_).astype(np.intp), 0, h - 1)
-        cl = np.clip(np.rint(cols - reach * dc_).astype(np.intp), 0, w - 1)
-        cr = np.clip(np.rint(cols + reach * dc_).astype(np.intp), 0, w - 1)
+    step_row, step_col = (0.0, 1.0) if direction is None else direction
+    rl, rr = (np.clip(np.rint(rows + s * reach * step_row).astype(np.intp), 0, h - 1) for s in (-1, 1))
+    cl, cr = (np.clip(np.rint(cols + s * reach * step_col).astype(np.intp), 0, w - 1) for s in (-1, 1))
     dl, dr = d[rl, cl], d[rr, cr]
     il, ir, i0 = image[rl, cl], image[rr, cr], image[rows, cols]
     with np.errstate(invalid="ignore"):
