@@ -515,18 +515,16 @@ class _ReferenceNodes:
         return cls(cols, map_y, nodes, *_cell_gradient(nodes, True))
 
 
-def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True, reference=None, offset_window_px=0.0) -> _Measurement:
+def _measure(smoothed, t, ref, d_pix, *, floor, window_px, reference, offset_window_px=0.0) -> _Measurement:
     """Warp every view with ``d_pix`` and fit the intensity-vs-position slope per pixel.
 
-    ``reference``: the level's :class:`_ReferenceNodes` (computed when not given).
+    ``reference``: the level's :class:`_ReferenceNodes` (of ``smoothed[ref]``).
     ``offset_window_px > 0``: remove each view's :func:`_photometric_offsets`
     from its difference before the fit (the occlusion weights are then
     recomputed from the corrected differences).
     """
     h, w = d_pix.shape
     d_nodes = _nodes_from_pixels(d_pix).astype(np.float32)
-    if reference is None:
-        reference = _ReferenceNodes.of(smoothed[ref])
     cols, map_y, ref_nodes = reference.cols, reference.map_y, reference.nodes
     n = len(smoothed)
     diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
@@ -544,12 +542,12 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, robust=True, referenc
         diffs[k] = _cell_mean(warped - ref_nodes)
         gcs[k] = 0.5 * (reference.grad_col + gc_k)
         grs[k] = 0.5 * (reference.grad_row + gr_k)
-    weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px) if robust else inside
+    weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px)
     offsets = None
     if offset_window_px > 0:
         offsets = _photometric_offsets(diffs, weights, reference.flat, offset_window_px)
         diffs = [None if o is None else diff - o for diff, o in zip(diffs, offsets)]
-        weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px) if robust else inside
+        weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px)
     slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, weights)
     wsum = np.zeros((h, w), np.float32)
     gc = np.zeros((h, w), np.float32)
@@ -1081,9 +1079,10 @@ def static_stereo(
     er, ec = np.nonzero(edge_mask)
     disparity = d.copy()
     if er.size:
-        at_points = [None if wk is None else wk[er, ec] for wk in m.weights]
-        offsets = None if m.offsets is None else [None if o is None else o[er, ec] for o in m.offsets]
-        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], at_points, int(edge_iterations), offsets)
+        def at_points(per_view):  # the per-view maps (reference: None) at the edge points
+            return None if per_view is None else [None if a is None else a[er, ec] for a in per_view]
+
+        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], at_points(m.weights), int(edge_iterations), at_points(m.offsets))
         with np.errstate(divide="ignore", invalid="ignore"):
             g_mag = np.hypot(m.grad_col[er, ec], m.grad_row[er, ec])
             cos = np.abs(m.grad_col[er, ec]) / g_mag
