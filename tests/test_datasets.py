@@ -94,8 +94,20 @@ def test_warp_sign_and_scale(scenes):
 
 @pytest.mark.data
 def test_tsukuba_integer_layers(scenes):
-    d = _load(scenes, "tsukuba").disparity
+    sc = _load(scenes, "tsukuba")
+    d = sc.disparity
     assert set(np.unique(d[np.isfinite(d)]).tolist()) == {5.0, 6.0, 7.0, 8.0, 10.0, 11.0, 14.0}
+    assert sc.truth_step_px == 1.0
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("name", ["teddy", "middlebury2005/Art", "middlebury2005/Moebius"])
+def test_truth_lies_on_its_step(scenes, name):
+    """Every stored disparity is a whole number of ``truth_step_px``; motorcycle's float truth has none."""
+    sc = _load(scenes, name)
+    d = sc.disparity[np.isfinite(sc.disparity)].astype(np.float64) / sc.truth_step_px
+    np.testing.assert_array_equal(d, np.round(d))
+    assert _load(scenes, "motorcycle").truth_step_px is None
 
 
 @pytest.mark.data
@@ -144,6 +156,7 @@ def test_downsample_scene(scenes):
     # warping still works at the smaller size
     warped, unwarped = _warp_errors(small, 1)
     assert warped < 5.5 and unwarped > 4 * warped  # 4.7 vs 24.7 (4.1 vs 26.2 at full size)
+    assert sc.truth_step_px == 1 / 8 and small.truth_step_px == 1 / 32
     assert D.downsample_scene(sc, 1).disparity.shape == sc.disparity.shape
     mc = D.downsample_scene(_load(scenes, "motorcycle"), 2)
     assert mc.principal_point_px == pytest.approx(((311.193 + 0.5) / 2 - 0.5, (254.877 + 0.5) / 2 - 0.5))
@@ -165,8 +178,9 @@ def test_view_subset(scenes):
         D.view_subset(sc, [1, 2, 4])
     with pytest.raises(ValueError, match="lie in 0..8"):
         D.view_subset(sc, [2, 9])
+    assert sc.truth_step_px == 1 / 16 and wide.truth_step_px == 1 / 8
     art = D.view_subset(_load(scenes, "middlebury2005/Art"), [1, 3, 5])
-    assert art.baseline == 80 and art.disparity_offset_px == 50
+    assert art.baseline == 80 and art.disparity_offset_px == 50 and art.truth_step_px == 1 / 4
     np.testing.assert_allclose(art.depth(), _load(scenes, "middlebury2005/Art").depth(), rtol=1e-5)
 
 

@@ -1,5 +1,6 @@
 """nfdepth.evaluate, nfdepth.baselines and ``nfdepth evaluate``."""
 
+import dataclasses
 import json
 import math
 
@@ -10,7 +11,17 @@ from scipy import ndimage
 from nfdepth import baselines
 from nfdepth.cli import main
 from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
-from nfdepth.evaluate import disparity_errors, error_map_png, evaluate_scene, evaluation_rows, render_markdown, resolve_dataset, select_views
+from nfdepth.evaluate import (
+    disparity_errors,
+    error_map_png,
+    evaluate_scene,
+    evaluation_rows,
+    photometric_truth_offset,
+    render_markdown,
+    resolve_dataset,
+    rounding_median_rel,
+    select_views,
+)
 
 
 def run_cli(capsys, *argv):
@@ -46,6 +57,35 @@ def test_disparity_errors_exact_values():
     assert e["bad_1px"] == pytest.approx(1 / 6)  # only the 2 px error; 1.0 is not > 1
     assert e["bad_0_5px"] == pytest.approx(2 / 6)
     assert e["mae_px"] == pytest.approx(err.mean())
+    # signed errors 0, +1, -0.4, 0, +2, +0.4: median (0 + 0.4) / 2
+    assert e["bias_px"] == pytest.approx(0.2)
+    assert math.isnan(e["truth_rounding_rel"])  # no step given
+    stepped = disparity_errors(est, truth, truth_step_px=0.5)
+    assert stepped["truth_rounding_rel"] == pytest.approx(rounding_median_rel(truth[np.isfinite(est) & np.isfinite(truth)], 0.5))
+    with pytest.raises(ValueError, match="truth_step_px"):
+        disparity_errors(est, truth, truth_step_px=-1.0)
+
+
+def test_rounding_floor_of_one_disparity_is_a_quarter_step():
+    """All points at d: |u| / d is uniform on [0, step / (2 d)], median step / (4 d)."""
+    assert rounding_median_rel(np.full(10, 8.0), 0.125) == pytest.approx(0.125 / 32)
+    assert rounding_median_rel([8.0, np.nan, 0.0], 0.125) == pytest.approx(0.125 / 32)
+    assert rounding_median_rel([5.0, 7.0], 0.0) == 0.0
+    assert math.isnan(rounding_median_rel([np.nan, 0.0], 0.125))
+
+
+def test_rounding_floor_matches_rounding_a_mixed_truth():
+    """The exact median against the median of simulated rounding errors (400k draws: +-0.5 %)."""
+    rng = np.random.default_rng(3)
+    # 30 % near (about 3 px), 70 % far (about 20 px)
+    t = np.where(rng.random(400_000) < 0.3, 3.0, 20.0) * rng.uniform(0.9, 1.1, 400_000)
+    step = 0.125
+    u = rng.uniform(-step / 2, step / 2, t.size)
+    simulated = float(np.median(np.abs(u) / t))
+    exact = rounding_median_rel(t, step)
+    assert exact == pytest.approx(simulated, rel=0.005)
+    # and the mixture's median is not the median point's quarter step: a real mixture effect
+    assert abs(exact - step / (4 * np.median(t))) > 0.2 * exact  # 0.209 % against 0.163 %
 
 
 def test_disparity_errors_mask_and_empty():
@@ -57,6 +97,7 @@ def test_disparity_errors_mask_and_empty():
     assert e["bad_0_5px"] == 0.0 and e["bad_1px"] == 0.0
     empty = disparity_errors(np.full((2, 2), np.nan), truth)
     assert empty["points"] == 0 and empty["density"] == 0.0 and math.isnan(empty["median_rel"])
+    assert math.isnan(empty["bias_px"]) and math.isnan(empty["truth_rounding_rel"])
     with pytest.raises(ValueError, match="same shape"):
         disparity_errors(np.zeros((2, 3)), truth)
 
@@ -148,6 +189,49 @@ def _synthetic_scene(d=3.0, n=5, reference=2):
     return MultiViewScene("synthetic", views, reference, truth, None, None, None, 0.0, colour, "test")
 
 
+def _slanted_scene():
+    """Five views of a texture whose disparity grows from 2 to 4 px per step down the rows (cubic-spline shifts)."""
+    tex = _texture(shape=(160, 200), seed=1)
+    h, w = tex.shape
+    d = 2.0 + 2.0 * np.arange(h) / h
+    views = [
+        np.stack([ndimage.shift(tex[r], -(k - 2) * d[r], order=3, mode="wrap") for r in range(h)]).astype(np.float32) for k in range(5)
+    ]
+    truth = np.repeat(d[:, None], w, axis=1).astype(np.float32)
+    return MultiViewScene("slanted", views, 2, truth, None, None, None, 0.0, np.zeros((h, w, 3), np.uint8), "test")
+
+
+@pytest.mark.parametrize("view", [0, 1, 3, 4])
+def test_photometric_truth_offset_finds_a_shifted_truth(view):
+    """A right truth reads 0, one stored 0.1 px low reads +0.1 (a view 5 grey levels brighter too).
+
+    Measured: |offset| <= 0.002 px. The bicubic warp's error at a fractional
+    shift (up to 0.04 px per step on this texture for one constant
+    disparity) cancels over the spread of disparities; 0.005 px allows for it.
+    """
+    scene = _slanted_scene()
+    scene.views[view] = scene.views[view] + np.float32(5.0)
+    right = photometric_truth_offset(scene, view)
+    assert right["steps"] == view - 2 and right["points"] > 10000
+    assert abs(right["offset_px"]) < 0.005
+    low = dataclasses.replace(scene, disparity=scene.disparity - np.float32(0.1))
+    res = photometric_truth_offset(low, view)
+    assert res["offset_px"] == pytest.approx(0.1, abs=0.005)
+    assert res["error_at_offset"] < 0.5 * res["error_at_zero"]
+
+
+def test_photometric_truth_offset_bad_input():
+    scene = _synthetic_scene()
+    for bad in (2, 5, -1, True, 1.0):
+        with pytest.raises(ValueError, match="view must be an index"):
+            photometric_truth_offset(scene, bad)
+    with pytest.raises(ValueError, match="search_px"):
+        photometric_truth_offset(scene, 1, search_px=0.0)
+    flat = dataclasses.replace(scene, views=[np.full_like(v, 100.0) for v in scene.views])
+    with pytest.raises(ValueError, match="smooth, textured pixels"):
+        photometric_truth_offset(flat, 1)
+
+
 def test_select_views():
     assert select_views(5, 2, "three") == [1, 2, 3]
     assert select_views(7, 0, "three") == [0, 1, 2]
@@ -162,10 +246,12 @@ def test_evaluate_scene_shape_and_table(tmp_path):
     res = evaluate_scene(_synthetic_scene(), views="three", methods=("nfdepth", "sgbm", "waxman_sinha"), keep_maps=True)
     assert res["views"] == [1, 2, 3] and res["view_count"] == 3
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
+    assert res["truth_step_px"] is None
     for m, entry in res["methods"].items():
         assert entry["runtime_s"] >= 0
         assert entry["dense"]["points"] > 0
-        assert set(entry["edges"]) >= {"points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px"}
+        assert set(entry["edges"]) >= {"points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px"}
+        assert math.isnan(entry["dense"]["truth_rounding_rel"])
     # peers are scored at exactly nfdepth's edge points
     assert res["methods"]["waxman_sinha"]["edges"]["truth_points"] == res["methods"]["nfdepth"]["edges"]["points"]
     assert res["methods"]["waxman_sinha"]["dense"]["median_rel"] < 0.03
@@ -233,13 +319,17 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     res = data[0]
     assert res["scene"] == "tsukuba" and res["views"] == [1, 2, 3] and res["shape"] == [288, 384]
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
-    keys = {"points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px"}
+    keys = {"points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel"}
+    assert res["truth_step_px"] == 1.0  # whole-pixel labels
+    assert "stored in steps of 1 px" in out and "bias px" in out
     for name, entry in res["methods"].items():
         assert set(entry) == {"runtime_s", "edges", "dense"} | (set() if name == "nfdepth" else {"nfdepth_at_shared_edges"})
         assert set(entry["edges"]) == keys and set(entry["dense"]) == keys
         assert 0 < entry["dense"]["density"] <= 1
         # every method is far better than chance on Tsukuba (disparity 5..14 px)
         assert entry["dense"]["median_rel"] < 0.1
+        # whole-pixel labels of 5..14 px: a perfect estimate would score a median of 1/4 px over ~8 px
+        assert 0.02 < entry["dense"]["truth_rounding_rel"] < 0.05
     assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3
 
 

@@ -195,6 +195,13 @@ class MultiViewScene:
         Citation line.
     principal_point_px : tuple of float or None
         ``(cx, cy)`` where published, else None (image centre).
+    truth_step_px : float or None
+        Resolution of ``disparity``: the step in which its values are
+        stored or labelled, in neighbour-step px (1/8 for Middlebury 2005
+        half size, 1/16 for Teddy, 1 for Tsukuba's whole-pixel labels);
+        None where the truth is stored as floats. Rounding to it alone
+        gives a perfect estimate an error of up to half a step
+        (:func:`nfdepth.evaluate.disparity_errors` reports that floor).
     """
 
     name: str
@@ -208,6 +215,7 @@ class MultiViewScene:
     colour_reference: np.ndarray
     source: str
     principal_point_px: tuple | None = field(default=None)
+    truth_step_px: float | None = field(default=None)
 
     @property
     def reference(self) -> np.ndarray:
@@ -316,7 +324,8 @@ def load_tsukuba(root=None) -> MultiViewScene:
     views = _read_views(views_p)
     disp = _read_coded_disparity(disp_p, 16.0)
     _check_shapes("tsukuba", views, disp)
-    return MultiViewScene("tsukuba", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TSUKUBA_SOURCE)
+    # hand-labelled whole-pixel layers: every v is a multiple of 16
+    return MultiViewScene("tsukuba", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TSUKUBA_SOURCE, truth_step_px=1.0)
 
 
 def load_teddy(root=None) -> MultiViewScene:
@@ -333,7 +342,7 @@ def load_teddy(root=None) -> MultiViewScene:
     views = _read_views(views_p)
     disp = _read_coded_disparity(disp_p, 16.0)
     _check_shapes("teddy", views, disp)
-    return MultiViewScene("teddy", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TEDDY_SOURCE)
+    return MultiViewScene("teddy", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TEDDY_SOURCE, truth_step_px=1.0 / 16.0)
 
 
 def _scene_name_2005(scene) -> str:
@@ -378,7 +387,8 @@ def load_middlebury2005(scene: str, root=None) -> MultiViewScene:
     name = f"middlebury2005/{scene}"
     _check_shapes(name, views, disp)
     return MultiViewScene(
-        name, views, 1, disp, 1870.0, 40.0, "mm", dmin / 8.0, _read_colour(views_p[1]), _MB2005_SOURCE.format(scene=scene)
+        name, views, 1, disp, 1870.0, 40.0, "mm", dmin / 8.0, _read_colour(views_p[1]), _MB2005_SOURCE.format(scene=scene),
+        truth_step_px=1.0 / 8.0,
     )
 
 
@@ -492,7 +502,8 @@ def downsample_scene(scene: MultiViewScene, factor, *, min_valid_fraction: float
     valid, else NaN (``min_valid_fraction=1`` makes any NaN in a block give
     NaN). ``focal_px`` and ``disparity_offset_px`` are divided by
     ``factor``; the baseline is unchanged, so :meth:`MultiViewScene.depth`
-    is preserved. A principal point maps as ``c' = (c + 0.5) / factor - 0.5``
+    is preserved. ``truth_step_px`` is divided by ``factor`` too (a bound:
+    averaging a block's rounded values can only shrink its rounding error). A principal point maps as ``c' = (c + 0.5) / factor - 0.5``
     (pixel centres).
 
     Parameters
@@ -545,6 +556,7 @@ def downsample_scene(scene: MultiViewScene, factor, *, min_valid_fraction: float
         focal_px=None if scene.focal_px is None else scene.focal_px / k,
         disparity_offset_px=scene.disparity_offset_px / k,
         principal_point_px=pp,
+        truth_step_px=None if scene.truth_step_px is None else scene.truth_step_px / k,
     )
 
 
@@ -552,7 +564,7 @@ def view_subset(scene: MultiViewScene, indices) -> MultiViewScene:
     """Keep some of the views, equally spaced and in increasing order.
 
     With a spacing of ``s`` original steps, the neighbour-step disparity,
-    the baseline and the disparity offset are multiplied by ``s`` so that
+    the baseline, the disparity offset and the truth's step are multiplied by ``s`` so that
     the scene's invariants (``d`` per view step, depth) still hold.
 
     Parameters
@@ -607,4 +619,5 @@ def view_subset(scene: MultiViewScene, indices) -> MultiViewScene:
         disparity=(scene.disparity * np.float32(s)).astype(np.float32),
         baseline=None if scene.baseline is None else scene.baseline * s,
         disparity_offset_px=scene.disparity_offset_px * s,
+        truth_step_px=None if scene.truth_step_px is None else scene.truth_step_px * s,
     )

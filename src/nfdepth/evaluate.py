@@ -40,6 +40,8 @@ __all__ = [
     "METHODS",
     "DEFAULT_METHODS",
     "disparity_errors",
+    "rounding_median_rel",
+    "photometric_truth_offset",
     "select_views",
     "evaluate_scene",
     "resolve_dataset",
@@ -52,13 +54,13 @@ __all__ = [
 
 METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")
 DEFAULT_METHODS = ("nfdepth", "sgbm", "waxman_sinha")
-_ERROR_KEYS = ("points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px")
+_ERROR_KEYS = ("points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel")
 
 
 # ------------------------------------------------------------------ one map
 
 
-def disparity_errors(estimate, truth, *, mask=None) -> dict:
+def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
     """Error figures of a disparity map against the ground truth.
 
     Parameters
@@ -67,6 +69,10 @@ def disparity_errors(estimate, truth, *, mask=None) -> dict:
         Disparity (px); NaN (or inf) where unknown.
     mask : array_like of bool, shape (H, W), optional
         Only these pixels count (also for ``density``).
+    truth_step_px : float, optional
+        The step in which the truth is stored or labelled
+        (:attr:`nfdepth.datasets.MultiViewScene.truth_step_px`); gives
+        ``truth_rounding_rel``.
 
     Returns
     -------
@@ -77,10 +83,20 @@ def disparity_errors(estimate, truth, *, mask=None) -> dict:
         ``median_rel``, ``p90_rel``: median and 90th percentile of
         ``|d - d_true| / |d_true|`` (pixels with ``d_true == 0`` left out);
         ``bad_1px``, ``bad_0_5px``: fraction of points with
-        ``|d - d_true| > 1`` / ``> 0.5`` px; ``mae_px``: mean ``|d - d_true|``.
+        ``|d - d_true| > 1`` / ``> 0.5`` px; ``mae_px``: mean ``|d - d_true|``;
+        ``bias_px``: median of ``d - d_true`` (signed: > 0 is an estimate
+        above the truth); ``truth_rounding_rel``: the ``median_rel`` that a
+        perfect estimate is expected to score on the same points against a
+        truth rounded to ``truth_step_px`` (:func:`rounding_median_rel`),
+        NaN without a step.
         Figures of an empty set are NaN (``density`` too when the truth is
         empty).
     """
+    if truth_step_px is not None:
+        truth_step_px = float(truth_step_px)
+        if not (math.isfinite(truth_step_px) and truth_step_px >= 0):
+            msg = f"truth_step_px must be a finite number >= 0 or None, got {truth_step_px!r}"
+            raise ValueError(msg)
     est = np.asarray(estimate, dtype=np.float64)
     tru = np.asarray(truth, dtype=np.float64)
     if est.shape != tru.shape:
@@ -98,9 +114,10 @@ def disparity_errors(estimate, truth, *, mask=None) -> dict:
     n = int(both.sum())
     out = {"points": n, "truth_points": n_truth, "density": n / n_truth if n_truth else math.nan}
     if n == 0:
-        out.update(median_rel=math.nan, p90_rel=math.nan, bad_1px=math.nan, bad_0_5px=math.nan, mae_px=math.nan)
+        out.update({key: math.nan for key in _ERROR_KEYS[2:]})
         return out
-    err = np.abs(est[both] - tru[both])
+    signed = est[both] - tru[both]
+    err = np.abs(signed)
     t = np.abs(tru[both])
     rel = err[t > 0] / t[t > 0]
     out["median_rel"] = float(np.median(rel)) if rel.size else math.nan
@@ -108,7 +125,155 @@ def disparity_errors(estimate, truth, *, mask=None) -> dict:
     out["bad_1px"] = float(np.mean(err > 1.0))
     out["bad_0_5px"] = float(np.mean(err > 0.5))
     out["mae_px"] = float(np.mean(err))
+    out["bias_px"] = float(np.median(signed))
+    out["truth_rounding_rel"] = rounding_median_rel(t, truth_step_px) if truth_step_px is not None else math.nan
     return out
+
+
+def rounding_median_rel(truth, step_px) -> float:
+    """Expected median relative error of a perfect estimate against a truth rounded to ``step_px``.
+
+    If each point's truth is off by an independent rounding error ``u``,
+    uniform on ``[-step/2, step/2]``, a perfect estimate scores
+    ``|u| / |d_true|``; this returns the median of that mixture, exactly:
+    ``x`` with ``mean_i min(1, 2 x |d_i| / step) = 1/2`` (points with
+    ``d = 0`` or non-finite left out). On a truth measured densely on curved
+    and slanted surfaces (Middlebury 2005, Teddy) it is the floor under
+    ``median_rel``: estimates better than the truth's resolution score about
+    this, however good they are. Where whole
+    regions share one rounding error (Tsukuba's fronto-parallel layers,
+    labelled in whole pixels) the errors are not independent and an estimate
+    can score below it.
+
+    Parameters
+    ----------
+    truth : array_like
+        True disparities (px) of the points scored.
+    step_px : float
+        Rounding step of the truth (px); 0 gives 0.
+
+    Returns
+    -------
+    float
+        NaN if no point has a finite, non-zero truth.
+    """
+    t = np.abs(np.asarray(truth, dtype=np.float64).ravel())
+    t = t[np.isfinite(t) & (t > 0)]
+    if t.size == 0:
+        return math.nan
+    if step_px == 0:
+        return 0.0
+    # a_i: the relative error at which point i's |u| / d_i saturates (u = step/2)
+    a = np.sort(0.5 * float(step_px) / t)
+    n = a.size
+    tail = np.cumsum((1.0 / a)[::-1])[::-1]  # tail[k] = sum over i >= k of 1 / a_i
+    k = np.arange(n)
+    # F on [a_(k-1), a_k] with k points saturated: F(x) = (k + x tail[k]) / n
+    k0 = int(np.argmax(k + a * tail >= 0.5 * n))
+    return float((0.5 * n - k0) / tail[k0])
+
+
+def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gradient: float = 2.0, max_truth_range_px: float = 0.5) -> dict:
+    """The constant offset of the ground truth that best explains the images, measured without any method.
+
+    Warps ``scene.views[view]`` onto the reference with ``truth + delta``
+    (both views smoothed by a 1 px Gaussian, then bicubic; pixel ``(r, c)``
+    seen at ``(r, c - k (d + delta))`` for ``k = view - reference_index``
+    view steps) and returns the ``delta``
+    minimising the mean absolute grey difference to the reference, after
+    removing the median difference (a global brightness offset). Only
+    pixels whose truth is smooth (within ``max_truth_range_px`` over a
+    7 x 7 window: no depth steps, no occlusion) and whose column gradient
+    is at least ``min_gradient`` grey levels per px (after a 1 px Gaussian)
+    count. A truth that is right gives ``delta`` near 0; a truth stored
+    truncated rather than rounded reads low by half a step (``+step / 2``).
+    The bicubic warp itself errs at fractional shifts (up to 0.04 px per step
+    on fine texture at one constant disparity), which cancels over a spread
+    of disparities (within 0.002 px on a slanted synthetic plane): the check
+    is meant for truths with many disparities, not for one fronto-parallel
+    plane.
+
+    Parameters
+    ----------
+    scene : MultiViewScene or str
+    view : int
+        Index into ``scene.views``, not the reference.
+    search_px : float
+        ``delta`` is searched in ``[-search_px, search_px]`` px per view step.
+
+    Returns
+    -------
+    dict
+        ``view``, ``steps`` (``k``), ``offset_px`` (``delta``, px per view
+        step), ``error_at_zero`` and ``error_at_offset`` (mean absolute grey
+        difference), ``points``.
+    """
+    import cv2
+    from scipy.optimize import minimize_scalar
+
+    from . import datasets
+
+    if isinstance(scene, str):
+        scene = datasets.load_scene(scene)
+    if not isinstance(scene, datasets.MultiViewScene):
+        msg = f"scene must be a MultiViewScene or a scene name, got {type(scene).__name__}"
+        raise TypeError(msg)
+    ref = scene.reference_index
+    n = len(scene.views)
+    if isinstance(view, bool) or not isinstance(view, (int, np.integer)) or not 0 <= view < n or view == ref:
+        msg = f"view must be an index into the scene's {n} views other than the reference {ref}, got {view!r}"
+        raise ValueError(msg)
+    if not (math.isfinite(search_px) and search_px > 0):
+        msg = f"search_px must be a finite number > 0, got {search_px!r}"
+        raise ValueError(msg)
+    steps = int(view) - ref
+    # both smoothed alike (1 px Gaussian): the shift is unchanged, the bicubic
+    # interpolation error of fine texture (a bias at fractional shifts) drops
+    image = cv2.GaussianBlur(np.asarray(scene.views[ref], np.float32), (0, 0), 1.0)
+    other = cv2.GaussianBlur(np.asarray(scene.views[view], np.float32), (0, 0), 1.0)
+    d = np.asarray(scene.disparity, np.float32)
+    known = np.isfinite(d)
+    window = np.ones((7, 7), np.uint8)
+    filled = np.where(known, d, np.float32(0.0))
+    all_known = cv2.erode(known.astype(np.uint8), window, borderType=cv2.BORDER_REPLICATE) > 0
+    smooth = cv2.dilate(filled, window) - cv2.erode(filled, window) <= max_truth_range_px
+    g = cv2.Sobel(image, cv2.CV_32F, 1, 0, ksize=3) / np.float32(8.0)
+    use = all_known & smooth & (np.abs(g) >= min_gradient)
+    rows, cols = np.nonzero(use)
+    if rows.size < 100:
+        msg = f"only {rows.size} smooth, textured pixels with a known truth; need at least 100"
+        raise ValueError(msg)
+    # the points as a (m, 1024) block: cv2.remap maps are images of fewer than 32767 columns
+    m = rows.size
+    pad = -m % 1024
+    map_y = np.pad(rows.astype(np.float32), (0, pad), constant_values=-2.0).reshape(-1, 1024)
+    base_x = cols.astype(np.float64) - steps * d[rows, cols].astype(np.float64)
+    values = image[rows, cols]
+    w = other.shape[1]
+
+    def error(delta):
+        x = (base_x - steps * delta).astype(np.float32)
+        map_x = np.pad(x, (0, pad), constant_values=-2.0).reshape(-1, 1024)
+        warped = cv2.remap(other, map_x, map_y, cv2.INTER_CUBIC, borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan).ravel()[:m]
+        inside = (x >= 0) & (x <= w - 1) & np.isfinite(warped)
+        diff = warped[inside] - values[inside]
+        return float(np.mean(np.abs(diff - np.median(diff)))) if diff.size else math.inf
+
+    grid = np.linspace(-search_px, search_px, round(2 * search_px / 0.02) + 1)
+    errors = [error(x) for x in grid]
+    i = int(np.argmin(errors))
+    spacing = grid[1] - grid[0]
+    lo_b, hi_b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    best = minimize_scalar(error, bounds=(lo_b, hi_b), method="bounded", options={"xatol": 1e-4 * spacing / 0.02})
+    delta = float(best.x) if best.fun <= errors[i] else float(grid[i])
+    return {
+        "view": int(view),
+        "steps": steps,
+        "offset_px": delta,
+        "error_at_zero": error(0.0),
+        "error_at_offset": error(delta),
+        "points": int(rows.size),
+    }
 
 
 # ------------------------------------------------------------------ one scene
@@ -193,7 +358,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     dict
         ``scene``, ``views`` (indices into the scene's row), ``view_count``,
         ``reference_index`` (into the row), ``downsample``, ``shape``,
-        ``truth_points`` and ``methods``: method -> ``{"runtime_s",
+        ``truth_points``, ``truth_step_px`` (the scene's, after view
+        selection and downsampling) and ``methods``: method -> ``{"runtime_s",
         "dense": errors, "edges": errors or None}`` (errors as
         :func:`disparity_errors`); a peer scored at nfdepth's edge points also
         has ``"nfdepth_at_shared_edges"``: nfdepth's errors at those of its
@@ -219,6 +385,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     if k > 1:
         sub = datasets.downsample_scene(sub, k)
     truth = sub.disparity
+    step = sub.truth_step_px
     max_disp = float(np.nanmax(truth)) if np.any(np.isfinite(truth)) else None
     out = {
         "scene": scene.name,
@@ -228,6 +395,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         "downsample": k,
         "shape": list(sub.shape),
         "truth_points": int(np.isfinite(truth).sum()),
+        "truth_step_px": step,
         "methods": {},
     }
     maps = {}
@@ -238,8 +406,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         edge_points = np.asarray(res.edge_mask, bool) & np.isfinite(d)
         out["methods"]["nfdepth"] = {
             "runtime_s": float(res.runtime_s),
-            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth),
-            "dense": disparity_errors(d, truth),
+            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step),
+            "dense": disparity_errors(d, truth, truth_step_px=step),
         }
         maps["nfdepth"] = d
     for m in methods:
@@ -248,14 +416,14 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         r = _run_peer(m, sub, max_disp)
         out["methods"][m] = {
             "runtime_s": float(r.runtime_s),
-            "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points),
-            "dense": disparity_errors(r.disparity, truth),
+            "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points, truth_step_px=step),
+            "dense": disparity_errors(r.disparity, truth, truth_step_px=step),
         }
         if edge_points is not None:
             # nfdepth on exactly the edge points where the peer has a value too:
             # the same point set on both sides (a peer may leave the hard ones out)
             shared = edge_points & np.isfinite(np.asarray(r.disparity, dtype=np.float64))
-            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared)
+            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared, truth_step_px=step)
         maps[m] = r.disparity
     if keep_maps:
         out["maps"] = maps
@@ -368,6 +536,10 @@ def _rel(x) -> str:
     return "–" if x is None or not np.isfinite(x) else f"{100 * x:.2f} %"
 
 
+def _px(x, fmt) -> str:
+    return "–" if x is None or not np.isfinite(x) else format(x, fmt)
+
+
 def evaluation_rows(result):
     """The rows of the tables of one :func:`evaluate_scene` result: ``(method, label, errors, runtime_s)``.
 
@@ -392,8 +564,8 @@ def render_markdown(results) -> str:
     if isinstance(results, dict):
         results = [results]
     head = (
-        "| scene | views | method | points | density | median rel | p90 rel | bad >1 px | bad >0.5 px | MAE px | runtime s |\n"
-        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| scene | views | method | points | density | median rel | truth rounding | p90 rel | bad >1 px | bad >0.5 px | MAE px | bias px | runtime s |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     )
     lines = [head]
     for res in results:
@@ -401,8 +573,8 @@ def render_markdown(results) -> str:
         for method, label, e, rt in evaluation_rows(res):
             lines.append(
                 f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
-                f"{_rel(e['median_rel'])} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | {_pct(e['bad_0_5px'])} | "
-                f"{'–' if not np.isfinite(e['mae_px']) else format(e['mae_px'], '.3f')} | {rt:.3f} |"
+                f"{_rel(e['median_rel'])} | {_rel(e.get('truth_rounding_rel'))} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | "
+                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {rt:.3f} |"
             )
     return "\n".join(lines)
 
