@@ -1,6 +1,9 @@
 """nfdepth against ground truth and against its peers on the real data sets.
 
-:func:`disparity_errors` scores one disparity map; :func:`evaluate_scene`
+:func:`disparity_errors` scores one disparity map (with the floor that the
+truth's own rounding sets, :func:`rounding_median_rel`);
+:func:`photometric_truth_offset` checks a truth against the images, with no
+stereo method; :func:`evaluate_scene`
 runs nfdepth's :func:`nfdepth.stereo.static_stereo` and the peers of
 :mod:`nfdepth.baselines` on one :class:`nfdepth.datasets.MultiViewScene`;
 :func:`evaluate_dataset` does it for several scenes; :func:`render_markdown`
