@@ -106,6 +106,30 @@ def check_nonnegative_finite(name: str, value) -> float:
     return number
 
 
+def check_int(name: str, value, minimum: int) -> int:
+    """Return ``value`` as int, or raise if it is not an integer >= ``minimum`` (bools refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        msg = f"{name} must be an integer >= {minimum}, got {value!r}"
+        raise TypeError(msg)
+    if value < minimum:
+        msg = f"{name} must be an integer >= {minimum}, got {value!r}"
+        raise ValueError(msg)
+    return int(value)
+
+
+def check_fraction(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a number within [0, 1]."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        msg = f"{name} must be a number within [0, 1], got {value!r}"
+        raise TypeError(msg) from None
+    if not 0 <= number <= 1:
+        msg = f"{name} must be within [0, 1], got {value!r}"
+        raise ValueError(msg)
+    return number
+
+
 def as_vector3(name: str, value) -> np.ndarray:
     """Return ``value`` as a finite float64 vector of length 3."""
     try:

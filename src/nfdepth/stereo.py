@@ -151,7 +151,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
-from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -906,7 +906,10 @@ def static_stereo(
     ------
     ValueError
         Fewer than 2 views, ``reference`` out of range, ``positions`` of the
-        wrong length or not strictly increasing, ``axis`` not "x"/"y".
+        wrong length or not strictly increasing, ``axis`` not "x"/"y", or
+        any option outside its range (the message names it and the range).
+    TypeError
+        An option of the wrong type (e.g. a float where a count is needed).
     """
     start = time.perf_counter()
     float_dtype(dtype)
@@ -927,27 +930,55 @@ def static_stereo(
     ref = int(reference)
     t = _check_positions(positions, n, ref)
     sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    if min_gradient is not None:
+        min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
+    max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
+    min_cos = check_fraction("min_cos", min_cos)
+    iterations_per_level = check_int("iterations_per_level", iterations_per_level, 1)
+    edge_iterations = check_int("edge_iterations", edge_iterations, 0)
     dense_window_px = check_positive_finite("dense_window_px", dense_window_px)
+    select_window_px = check_positive_finite("select_window_px", select_window_px)
     max_std_px = check_positive_finite("max_std_px", max_std_px)
-    photometric_window_px = check_nonnegative_finite("photometric_window_px", photometric_window_px)
-    max_edge_std_px = float(max_edge_std_px)
-    if not max_edge_std_px > 0:
-        msg = f"max_edge_std_px must be > 0 (inf allowed), got {max_edge_std_px!r}"
-        raise ValueError(msg)
-    if aggregation not in ("guided", "gaussian"):
-        msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
-        raise ValueError(msg)
+    for name, value in (("max_edge_std_px", max_edge_std_px), ("max_edge_disagreement_px", max_edge_disagreement_px)):
+        if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) and value > 0):
+            msg = f"{name} must be a number > 0 (inf: no limit), got {value!r}"
+            raise ValueError(msg)
+    max_edge_std_px, max_edge_disagreement_px = float(max_edge_std_px), float(max_edge_disagreement_px)
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
+    for name, value in (("view_schedule", view_schedule), ("cost_volume", cost_volume)):
+        if not isinstance(value, (bool, np.bool_)):
+            msg = f"{name} must be True or False, got {value!r}"
+            raise TypeError(msg)
+    if aggregation not in ("guided", "gaussian"):
+        msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
+        raise ValueError(msg)
+    guided_eps = check_positive_finite("guided_eps", guided_eps)
+    guided_scale = check_positive_finite("guided_scale", guided_scale)
+    propagate_rounds = check_int("propagate_rounds", propagate_rounds, 0)
+    propagate_levels = check_int("propagate_levels", propagate_levels, 0)
+    propagate_radius = check_int("propagate_radius", propagate_radius, 1)
+    polish_iterations = check_int("polish_iterations", polish_iterations, 0)
+    polish_radius = check_int("polish_radius", polish_radius, 1)
+    photometric_window_px = check_nonnegative_finite("photometric_window_px", photometric_window_px)
+    cost_step_px = check_positive_finite("cost_step_px", cost_step_px)
+    cost_radius = check_int("cost_radius", cost_radius, 1)
+    cost_eps = check_positive_finite("cost_eps", cost_eps)
+    cost_tau_i = check_positive_finite("cost_tau_i", cost_tau_i)
+    cost_tau_g = check_positive_finite("cost_tau_g", cost_tau_g)
+    cost_alpha = check_fraction("cost_alpha", cost_alpha)
+    cost_sigma_px = check_nonnegative_finite("cost_sigma_px", cost_sigma_px)
+    if cost_median_px not in (0, 1, 3, 5):
+        msg = f"cost_median_px must be 0, 1, 3 or 5, got {cost_median_px!r}"
+        raise ValueError(msg)
+    min_cost_margin = check_nonnegative_finite("min_cost_margin", min_cost_margin)
+    edge_cost_margin = check_nonnegative_finite("edge_cost_margin", edge_cost_margin)
+    edge_step_px = check_nonnegative_finite("edge_step_px", edge_step_px)
     if threads is None:
         threads = max(1, cv2.getNumThreads())
-    elif isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
-        msg = f"threads must be an int >= 1 (or None: cv2.getNumThreads()), got {threads!r}"
-        raise ValueError(msg)
-    if int(iterations_per_level) < 1 or int(edge_iterations) < 0:
-        msg = "iterations_per_level must be >= 1 and edge_iterations >= 0"
-        raise ValueError(msg)
+    else:
+        threads = check_int("threads", threads, 1)
     if axis == "y":
         views = [np.ascontiguousarray(v.T) for v in views]
     shape = views[0].shape
@@ -988,7 +1019,7 @@ def static_stereo(
         # With the cost volume the finest level's differential field only sets the
         # search range, which the next coarser level gives as well (+-2 px margin).
         skip = cost_volume and level == 0 and levels > 1
-        for _ in range(0 if skip else int(iterations_per_level)):
+        for _ in range(0 if skip else iterations_per_level):
             m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
             num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
@@ -1026,7 +1057,7 @@ def static_stereo(
             # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
             d, c_best, c_second = best_disparity(
                 feats, t, ref, candidates, guide[0], radius=cost_radius, eps=cost_eps,
-                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0, threads=int(threads),
+                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0, threads=threads,
             )
             del feats, src
             # uniqueness: the best cost against the best one more than 1 px away
@@ -1036,12 +1067,12 @@ def static_stereo(
                 d = cv2.medianBlur(d, cost_median_px)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
         if propagate:
-            d = _propagate(smoothed, t, ref, d, guide[level], rounds=int(propagate_rounds), radius=propagate_radius, eps=guided_eps * 0.1)
+            d = _propagate(smoothed, t, ref, d, guide[level], rounds=propagate_rounds, radius=propagate_radius, eps=guided_eps * 0.1)
         if propagate or (cost_volume and level == 0):
             # differential polish (sub-pixel), kept within half a candidate step of the discrete field
             d_discrete = d
-            reach = 0.5 * step if (cost_volume and level == 0) else 0.5 * int(polish_iterations)
-            for _ in range(int(polish_iterations)):
+            reach = 0.5 * step if (cost_volume and level == 0) else 0.5 * polish_iterations
+            for _ in range(polish_iterations):
                 m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
                 info = m.grad_col**2 * m.s_tt
                 with np.errstate(divide="ignore", invalid="ignore"):
@@ -1086,7 +1117,7 @@ def static_stereo(
         def at_points(per_view):  # the per-view maps (reference: None) at the edge points
             return None if per_view is None else [None if a is None else a[er, ec] for a in per_view]
 
-        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], at_points(m.weights), int(edge_iterations), at_points(m.offsets))
+        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], at_points(m.weights), edge_iterations, at_points(m.offsets))
         with np.errstate(divide="ignore", invalid="ignore"):
             g_mag = np.hypot(m.grad_col[er, ec], m.grad_row[er, ec])
             cos = np.abs(m.grad_col[er, ec]) / g_mag

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_vector3, check_finite, check_frame_size, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_vector3, check_finite, check_frame_size, check_int, check_nonnegative_finite, check_positive_finite, float_dtype
 from .camera import PinholeCamera, RigidMotion
 
 __all__ = [
@@ -116,16 +116,6 @@ def _check_type(name: str, value, cls, *, allow_none: bool = True):
         msg = f"{name} must be a {cls.__name__}{' or None' if allow_none else ''}, got {type(value).__name__}"
         raise TypeError(msg)
     return value
-
-
-def _check_int(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        msg = f"{name} must be an integer >= {minimum}, got {value!r}"
-        raise TypeError(msg)
-    if value < minimum:
-        msg = f"{name} must be an integer >= {minimum}, got {value!r}"
-        raise ValueError(msg)
-    return int(value)
 
 
 # ---------------------------------------------------------------------------
@@ -934,9 +924,9 @@ def static_sequence(
     """
     _check_type("polyhedron", polyhedron, ConvexPolyhedron, allow_none=False)
     _check_camera(camera)
-    n = _check_int("n_views", n_views, 2)
+    n = check_int("n_views", n_views, 2)
     step = as_vector3("camera_step", camera_step)
-    ref = (n - 1) // 2 if reference_index is None else _check_int("reference_index", reference_index, 0)
+    ref = (n - 1) // 2 if reference_index is None else check_int("reference_index", reference_index, 0)
     if ref >= n:
         msg = f"reference_index must be in 0..{n - 1}, got {ref}"
         raise ValueError(msg)
@@ -1003,7 +993,7 @@ PAPER_EXPERIMENTS = {
 
 def paper_camera(*, image_size_px=200) -> PinholeCamera:
     """The paper's camera: f = 100 px, square image, principal point at the centre."""
-    n = _check_int("image_size_px", image_size_px, 2)
+    n = check_int("image_size_px", image_size_px, 2)
     return PinholeCamera(PAPER_FOCAL_PX, n, n)
 
 
