@@ -131,6 +131,9 @@ BAD_LIBRARY_CALLS = [
     ("edges field", _call(nf.select_edge_points, "field", TEX), TypeError, "field must be a nfdepth.GradientField (from normal_flow), got str"),
     ("edges shape", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX[:-1]), ValueError, "smoothed_middle must have shape (32, 32), got (31, 32)"),
     ("edges corner", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, max_corner_ratio=np.nan), ValueError, "max_corner_ratio must be within [0, 1], got nan"),
+    ("edges corner str", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, max_corner_ratio="x"), TypeError, "max_corner_ratio must be a number within [0, 1], got 'x'"),
+    ("edges corner window", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, corner_window_px=0), ValueError, "corner_window_px must be a positive finite number, got 0"),
+    ("dyn corner str", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, max_corner_ratio="x"), TypeError, "max_corner_ratio must be a number within [0, 1], got 'x'"),
     ("edges gradient", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, min_gradient=-1.0), ValueError, "min_gradient must be a finite number >= 0, got -1.0"),
     ("edges border", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, border_px=-1), ValueError, "border_px must be an int >= 0, got -1"),
     # dense stereo (public API)

@@ -176,6 +176,12 @@ def test_baselines_bad_input():
         baselines.waxman_sinha_disparity([a, a], reference=2)
     with pytest.raises(ValueError, match="strictly increasing"):
         baselines.waxman_sinha_disparity([a, a], reference=0, positions=[1, 0])
+    for bad, exc in ((4, ValueError), (13, ValueError), (np.nan, ValueError), (5.5, ValueError), ("5", TypeError), (True, TypeError)):
+        with pytest.raises(exc, match=r"block_size must be an odd integer in \[1, 11\]"):
+            baselines.sgbm_disparity(a, a, block_size=bad)
+    assert np.isfinite(baselines.sgbm_disparity(a, a, block_size=5.0)).any()  # a whole float is a whole number
+    with pytest.raises(TypeError, match="chain must be True or False, got 'no'"):
+        baselines.waxman_sinha_disparity([a, a], reference=0, chain="no")
 
 
 # ------------------------------------------------------------------ evaluate_scene, synthetic

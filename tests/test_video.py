@@ -112,6 +112,9 @@ def test_library_argument_errors(scene):
         next(depth_from_video(scene.frames, camera=scene.camera, velocity=STEP, positions=np.zeros((9, 3))))
     with pytest.raises(ValueError, match="not all zero"):
         next(depth_from_video(scene.frames, camera=scene.camera, velocity=(0, 0, 0)))
+    for name, bad, exc in (("max_age", -1, ValueError), ("max_age", 2.5, TypeError), ("first_frame", -1, ValueError), ("first_frame", True, TypeError)):
+        with pytest.raises(exc, match=f"{name} must be an integer >= 0, got {bad!r}"):
+            next(depth_from_video(scene.frames, camera=scene.camera, velocity=STEP, **{name: bad}))
 
 
 def test_read_video_sources(tmp_path, sequence_dir, scene):

@@ -27,6 +27,7 @@ All functions take grey (or colour) float or uint8 images on a 0..255 scale.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -147,8 +148,10 @@ def _check_num_disparities(num_disparities, width: int, max_disparity=None) -> i
 
 
 def _check_block(block_size, *, low: int, high: int) -> int:
-    if isinstance(block_size, bool) or int(block_size) != block_size or not low <= block_size <= high or block_size % 2 == 0:
-        msg = f"block_size must be an odd integer in [{low}, {high}], got {block_size!r}"
+    msg = f"block_size must be an odd integer in [{low}, {high}], got {block_size!r}"
+    if isinstance(block_size, bool) or not isinstance(block_size, (int, float, np.integer, np.floating)):
+        raise TypeError(msg)
+    if not (math.isfinite(block_size) and int(block_size) == block_size and low <= block_size <= high and block_size % 2 == 1):
         raise ValueError(msg)
     return int(block_size)
 
@@ -346,6 +349,9 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
     if method not in ("dis", "farneback"):
         msg = f"method must be 'dis' or 'farneback', got {method!r}"
         raise ValueError(msg)
+    if not isinstance(chain, (bool, np.bool_)):
+        msg = f"chain must be True or False, got {chain!r}"
+        raise TypeError(msg)
     pos = np.arange(n, dtype=float) if positions is None else np.asarray(positions, dtype=float)
     if pos.shape != (n,) or not np.all(np.isfinite(pos)) or not np.all(np.diff(pos) > 0):
         msg = f"positions must be {n} strictly increasing finite numbers, got {positions!r}"

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validate import check_nonnegative_finite, check_positive_finite
+from ._validate import check_fraction, check_nonnegative_finite, check_positive_finite
 from .normal_flow import GradientField
 
 __all__ = [
@@ -220,9 +220,8 @@ def select_edge_points(
     if smoothed_middle.shape != (mag.shape[0] + 1, mag.shape[1] + 1):
         msg = f"smoothed_middle must have shape {(mag.shape[0] + 1, mag.shape[1] + 1)}, got {smoothed_middle.shape}"
         raise ValueError(msg)
-    if not 0 <= max_corner_ratio <= 1:
-        msg = f"max_corner_ratio must be within [0, 1], got {max_corner_ratio!r}"
-        raise ValueError(msg)
+    max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
+    corner_window_px = check_positive_finite("corner_window_px", corner_window_px)
     if min_gradient is None:
         relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
         high = float(np.percentile(mag, 99.0)) if mag.size else 0.0

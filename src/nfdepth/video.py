@@ -74,7 +74,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_image, check_nonnegative_finite, check_positive_finite
+from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite
 from .camera import PinholeCamera
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
 from .normal_flow import estimate_noise_std
@@ -456,10 +456,8 @@ def depth_from_video(
     process_noise = check_nonnegative_finite("process_noise", process_noise)
     gate = check_positive_finite("gate", gate)
     min_std_px = check_positive_finite("min_std_px", min_std_px)
-    if int(max_age) < 0:
-        msg = f"max_age must be >= 0, got {max_age!r}"
-        raise ValueError(msg)
-    first = int(first_frame)
+    max_age = check_int("max_age", max_age, 0)
+    first = check_int("first_frame", first_frame, 0)
 
     window: list[np.ndarray] = []
     state: _State | None = None
@@ -515,7 +513,7 @@ def depth_from_video(
         else:
             disp = rmat.T @ (p_mid - prev_pos)
             state = _predict(state, cam, disp, process_noise)
-        state = _update(state, rho_m, var_m, gate=gate, max_age=int(max_age))
+        state = _update(state, rho_m, var_m, gate=gate, max_age=max_age)
         prev_pos = p_mid
         yield VideoDepthFrame(
             index=k,
