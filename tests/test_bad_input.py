@@ -102,8 +102,8 @@ BAD_LIBRARY_CALLS = [
     # depth solvers
     ("solve camera", _call(nf.solve_inverse_depth, [1.0], camera=None, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT), TypeError, "camera must be a nfdepth.PinholeCamera, got NoneType"),
     ("solve motion", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=(1, 0, 0)), TypeError, "relative_motion must be a nfdepth.RigidMotion, got tuple"),
-    ("solve min_cos", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2.0"),
-    ("solve min_cos neg", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=-0.1), ValueError, "min_cos must be a finite number >= 0, got -0.1"),
+    ("solve min_cos", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2"),
+    ("solve min_cos neg", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=-0.1), ValueError, "min_cos must be within [0, 1], got -0.1"),
     ("solve max_rel_std no std", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, max_rel_std=0.1), ValueError, "max_rel_std needs delta_vn_std"),
     ("x zero baseline", _call(nf.depth_x_translation, [1.0], [0.0], focal_px=100.0, delta_vx=0.0), ValueError, "delta_vx must be a non-zero finite translation, got 0.0"),
     ("x focal 0", _call(nf.depth_x_translation, [1.0], [0.0], focal_px=0.0, delta_vx=1.0), ValueError, "focal_px must be a positive finite number, got 0.0"),
@@ -135,7 +135,7 @@ BAD_LIBRARY_CALLS = [
     ("edges corner window", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, corner_window_px=0), ValueError, "corner_window_px must be a positive finite number, got 0"),
     ("dyn corner str", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, max_corner_ratio="x"), TypeError, "max_corner_ratio must be a number within [0, 1], got 'x'"),
     ("edges gradient", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, min_gradient=-1.0), ValueError, "min_gradient must be a finite number >= 0, got -1.0"),
-    ("edges border", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, border_px=-1), ValueError, "border_px must be an int >= 0, got -1"),
+    ("edges border", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, border_px=-1), ValueError, "border_px must be an integer >= 0, got -1"),
     # dense stereo (public API)
     ("stereo 1 view", _call(stereo.static_stereo, [TEX], reference=0), ValueError, "views must hold at least 2 frames, got 1"),
     ("stereo reference", _call(stereo.static_stereo, VIEWS3, reference=3), ValueError, "reference must be a view index in 0..2, got 3"),

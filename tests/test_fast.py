@@ -178,7 +178,10 @@ def test_streaming_bad_input():
         ({"sigma_px": 1.0, "max_corner_ratio": 1.5}, ValueError, "max_corner_ratio"),
         ({"sigma_px": 1.0, "min_gradient": -2.0}, ValueError, "min_gradient"),
         ({"sigma_px": 1.0, "corner_window_px": 0.0}, ValueError, "corner_window_px"),
-        ({"sigma_px": 1.0, "border_px": -1}, ValueError, "border_px"),
+        ({"sigma_px": 1.0, "max_corner_ratio": "x"}, TypeError, "max_corner_ratio must be a number within \\[0, 1\\], got 'x'"),
+        ({"sigma_px": 1.0, "border_px": -1}, ValueError, "border_px must be an integer >= 0, got -1"),
+        ({"sigma_px": 1.0, "border_px": 2.5}, TypeError, "border_px must be an integer >= 0, got 2.5"),
+        ({"sigma_px": 1.0, "border_px": True}, TypeError, "border_px must be an integer >= 0, got True"),
         ({"sigma_px": "wide"}, TypeError, "sigma_px"),
     ],
 )

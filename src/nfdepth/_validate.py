@@ -66,44 +66,40 @@ def check_frame_size(name: str, shape) -> None:
         raise ImageTooLargeError(msg)
 
 
-def check_finite(name: str, value, *, unit: str = "") -> float:
-    """Return ``value`` as float, or raise if it is not a finite number."""
-    what = f"a finite number{f' ({unit})' if unit else ''}"
+def _check_number(name: str, value, what: str, accept, *, refused: str | None = None) -> float:
+    """Return ``value`` as float; TypeError if it is not a number, ValueError if ``accept(number)`` is false.
+
+    Both messages read "``name`` must be ``what``, got ``value``" (``refused`` replaces ``what`` in the second).
+    """
     try:
         number = float(value)
     except (TypeError, ValueError):
         msg = f"{name} must be {what}, got {value!r}"
         raise TypeError(msg) from None
-    if not np.isfinite(number):
-        msg = f"{name} must be {what}, got {value!r}"
+    if not accept(number):
+        msg = f"{name} must be {refused or what}, got {value!r}"
         raise ValueError(msg)
     return number
+
+
+def check_finite(name: str, value, *, unit: str = "") -> float:
+    """Return ``value`` as float, or raise if it is not a finite number."""
+    return _check_number(name, value, f"a finite number{f' ({unit})' if unit else ''}", np.isfinite)
 
 
 def check_positive_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number > 0."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        msg = f"{name} must be a positive finite number, got {value!r}"
-        raise TypeError(msg) from None
-    if not np.isfinite(number) or number <= 0:
-        msg = f"{name} must be a positive finite number, got {value!r}"
-        raise ValueError(msg)
-    return number
+    return _check_number(name, value, "a positive finite number", lambda x: np.isfinite(x) and x > 0)
 
 
 def check_nonnegative_finite(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a finite number >= 0."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        msg = f"{name} must be a finite number >= 0, got {value!r}"
-        raise TypeError(msg) from None
-    if not np.isfinite(number) or number < 0:
-        msg = f"{name} must be a finite number >= 0, got {value!r}"
-        raise ValueError(msg)
-    return number
+    return _check_number(name, value, "a finite number >= 0", lambda x: np.isfinite(x) and x >= 0)
+
+
+def check_nonzero_finite(name: str, value, *, what: str = "a non-zero finite number") -> float:
+    """Return ``value`` as float, or raise if it is not a finite, non-zero number."""
+    return _check_number(name, value, what, lambda x: np.isfinite(x) and x != 0)
 
 
 def check_int(name: str, value, minimum: int) -> int:
@@ -119,15 +115,7 @@ def check_int(name: str, value, minimum: int) -> int:
 
 def check_fraction(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a number within [0, 1]."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        msg = f"{name} must be a number within [0, 1], got {value!r}"
-        raise TypeError(msg) from None
-    if not 0 <= number <= 1:
-        msg = f"{name} must be within [0, 1], got {value!r}"
-        raise ValueError(msg)
-    return number
+    return _check_number(name, value, "a number within [0, 1]", lambda x: 0 <= x <= 1, refused="within [0, 1]")
 
 
 def as_vector3(name: str, value) -> np.ndarray:

@@ -25,7 +25,12 @@ from enum import IntEnum
 
 import numpy as np
 
-from ._validate import check_nonnegative_finite, check_positive_finite
+from ._validate import (
+    check_fraction,
+    check_nonnegative_finite,
+    check_nonzero_finite,
+    check_positive_finite,
+)
 from .camera import PinholeCamera, RigidMotion, relative_normal_flow_coefficients
 
 __all__ = [
@@ -138,10 +143,7 @@ def solve_inverse_depth(
     if not isinstance(relative_motion, RigidMotion):
         msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
         raise TypeError(msg)
-    min_cos = check_nonnegative_finite("min_cos", min_cos)
-    if min_cos > 1:
-        msg = f"min_cos must be within [0, 1], got {min_cos!r}"
-        raise ValueError(msg)
+    min_cos = check_fraction("min_cos", min_cos)
     dvn = np.asarray(delta_vn, dtype=float)
     alpha = np.asarray(alpha, dtype=float)
     a, b = relative_normal_flow_coefficients(camera, rows, cols, alpha, relative_motion)
@@ -177,18 +179,6 @@ def solve_inverse_depth(
     return InverseDepth(rho, rho_std, reason, np.asarray(b, dtype=float))
 
 
-def _nonzero_translation(name: str, value) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        msg = f"{name} must be a non-zero finite translation, got {value!r}"
-        raise TypeError(msg) from None
-    if not np.isfinite(number) or number == 0:
-        msg = f"{name} must be a non-zero finite translation, got {value!r}"
-        raise ValueError(msg)
-    return number
-
-
 def _special_case(numerator, delta_vn):
     dvn = np.asarray(delta_vn, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -203,14 +193,14 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
     ``dVn`` in px per unit time); NaN where ``Z`` would not be positive.
     """
     f = check_positive_finite("focal_px", focal_px)
-    delta_vx = _nonzero_translation("delta_vx", delta_vx)
+    delta_vx = check_nonzero_finite("delta_vx", delta_vx, what="a non-zero finite translation")
     return _special_case(f * delta_vx * np.cos(alpha), delta_vn)
 
 
 def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
     """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``."""
     f = check_positive_finite("focal_px", focal_px)
-    delta_vy = _nonzero_translation("delta_vy", delta_vy)
+    delta_vy = check_nonzero_finite("delta_vy", delta_vy, what="a non-zero finite translation")
     return _special_case(f * delta_vy * np.sin(alpha), delta_vn)
 
 
@@ -219,7 +209,7 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
     if not isinstance(camera, PinholeCamera):
         msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
         raise TypeError(msg)
-    delta_vz = _nonzero_translation("delta_vz", delta_vz)
+    delta_vz = check_nonzero_finite("delta_vz", delta_vz, what="a non-zero finite translation")
     x, y = camera.to_normalized(rows, cols)
     return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validate import check_fraction, check_nonnegative_finite, check_positive_finite
+from ._validate import check_fraction, check_int, check_nonnegative_finite, check_positive_finite
 from .normal_flow import GradientField
 
 __all__ = [
@@ -213,9 +213,7 @@ def select_edge_points(
         msg = f"field must be a nfdepth.GradientField (from normal_flow), got {type(field).__name__}"
         raise TypeError(msg)
     smoothed_middle = np.asarray(smoothed_middle)
-    if isinstance(border_px, (bool, np.bool_)) or not isinstance(border_px, (int, np.integer)) or border_px < 0:
-        msg = f"border_px must be an int >= 0, got {border_px!r}"
-        raise ValueError(msg)
+    border_px = check_int("border_px", border_px, 0)
     mag = field.magnitude
     if smoothed_middle.shape != (mag.shape[0] + 1, mag.shape[1] + 1):
         msg = f"smoothed_middle must have shape {(mag.shape[0] + 1, mag.shape[1] + 1)}, got {smoothed_middle.shape}"
@@ -233,7 +231,7 @@ def select_edge_points(
     ratio = corner_ratio(field.grad_col, field.grad_row, window_sigma_px=corner_window_px)
     corner = ~(ratio <= max_corner_ratio)
     inside = np.zeros_like(zero)
-    b = int(border_px)
+    b = border_px
     if mag.shape[0] > 2 * b and mag.shape[1] > 2 * b:
         inside[b : mag.shape[0] - b, b : mag.shape[1] - b] = True
     mask = zero & strong & ~corner & inside

@@ -90,7 +90,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite
+from ._validate import as_frames, as_image, check_fraction, check_int, check_nonnegative_finite, check_positive_finite
 from .edges import _block_read_back, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
 
@@ -167,21 +167,12 @@ def _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, 
     if min_gradient is not None:
         min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
     relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
-    try:
-        max_corner_ratio = float(max_corner_ratio)
-    except (TypeError, ValueError):
-        msg = f"max_corner_ratio must be a number within [0, 1], got {max_corner_ratio!r}"
-        raise TypeError(msg) from None
-    if not 0 <= max_corner_ratio <= 1:
-        msg = f"max_corner_ratio must be within [0, 1], got {max_corner_ratio!r}"
-        raise ValueError(msg)
+    max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     if corner_window_px is None:
         corner_window_px = max(sigma_px, 1.0)
     corner_window_px = check_positive_finite("corner_window_px", corner_window_px)
-    if isinstance(border_px, bool) or not isinstance(border_px, (int, np.integer)) or border_px < 0:
-        msg = f"border_px must be an integer >= 0, got {border_px!r}"
-        raise ValueError(msg)
-    return _Params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, int(border_px))
+    border_px = check_int("border_px", border_px, 0)
+    return _Params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px)
 
 
 def _gauss_kernel(sigma_px: float, radius_sigmas: float) -> np.ndarray:
