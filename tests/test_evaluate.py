@@ -12,6 +12,7 @@ from nfdepth import baselines
 from nfdepth.cli import main
 from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
 from nfdepth.evaluate import (
+    depth_step_mask,
     disparity_errors,
     error_map_png,
     evaluate_scene,
@@ -100,6 +101,60 @@ def test_disparity_errors_mask_and_empty():
     assert math.isnan(empty["bias_px"]) and math.isnan(empty["truth_rounding_rel"])
     with pytest.raises(ValueError, match="same shape"):
         disparity_errors(np.zeros((2, 3)), truth)
+
+
+def _step_truth():
+    """10 px left of column 20, 20 px from it on: one step between columns 19 and 20."""
+    truth = np.full((30, 40), 10.0)
+    truth[:, 20:] = 20.0
+    return truth
+
+
+def test_depth_step_mask_marks_the_step_dilated():
+    near = depth_step_mask(_step_truth())
+    # columns 19 and 20 make the step; the 9 x 9 square adds 4 either side: 15..24, every row
+    expected = np.zeros((30, 40), bool)
+    expected[:, 15:25] = True
+    np.testing.assert_array_equal(near, expected)
+    narrow = depth_step_mask(_step_truth(), width_px=1)
+    assert np.array_equal(np.nonzero(narrow.any(axis=0))[0], [19, 20])
+    # a jump of exactly the gap is no step, nor is a steep ramp (1.9 px per column)
+    assert not depth_step_mask(_step_truth(), gap_px=10.0).any()
+    assert not depth_step_mask(np.tile(np.arange(40) * 1.9, (30, 1))).any()
+    # a row of the step: the vertical direction counts too
+    assert np.array_equal(np.nonzero(depth_step_mask(_step_truth().T, width_px=1).any(axis=1))[0], [19, 20])
+    # unknown truth makes no step
+    holed = _step_truth()
+    holed[:, 20] = np.nan
+    assert not depth_step_mask(holed).any()
+
+
+def test_depth_step_mask_bad_input():
+    with pytest.raises(ValueError, match="gap_px must be a positive finite number, got 0"):
+        depth_step_mask(_step_truth(), gap_px=0)
+    with pytest.raises(ValueError, match="width_px must be odd, got 4"):
+        depth_step_mask(_step_truth(), width_px=4)
+    with pytest.raises(TypeError, match="width_px must be an integer >= 1, got 2.5"):
+        depth_step_mask(_step_truth(), width_px=2.5)
+    with pytest.raises(ValueError, match="truth must be a 2-D disparity map"):
+        depth_step_mask(np.zeros((2, 3, 4)))
+
+
+def test_disparity_errors_split_at_depth_steps():
+    truth = _step_truth()
+    near = depth_step_mask(truth)
+    est = truth + np.where(near, 2.0, 0.5)  # wrong near the step only
+    e = disparity_errors(est, truth, near_steps=near)
+    assert e["near_steps_share"] == pytest.approx(10 / 40)
+    assert e["bad_1px_near_steps"] == 1.0 and e["bad_1px_off_steps"] == 0.0
+    assert e["bad_1px"] == pytest.approx(10 / 40)
+    # only the points scored count: masked to the step, nothing is off it
+    at = disparity_errors(est, truth, mask=near, near_steps=near)
+    assert at["near_steps_share"] == 1.0 and math.isnan(at["bad_1px_off_steps"])
+    plain = disparity_errors(est, truth)
+    assert all(math.isnan(plain[k]) for k in ("near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps"))
+    with pytest.raises(ValueError, match="near_steps must have the shape of truth"):
+        disparity_errors(est, truth, near_steps=near[:, :5])
 
 
 # ------------------------------------------------------------------ baselines, synthetic
@@ -325,9 +380,14 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     res = data[0]
     assert res["scene"] == "tsukuba" and res["views"] == [1, 2, 3] and res["shape"] == [288, 384]
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
-    keys = {"points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel"}
+    keys = {
+        "points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
+        "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+    }
     assert res["truth_step_px"] == 1.0  # whole-pixel labels
-    assert "stored in steps of 1 px" in out and "bias px" in out
+    assert "stored in steps of 1 px" in out and "bias px" in out and "near a depth step" in out and "bad>1 off" in out
+    # Tsukuba's layers: about a sixth of the truth lies within 4 px of a step of more than 2 px
+    assert 0.1 < res["near_steps_share"] < 0.25
     for name, entry in res["methods"].items():
         assert set(entry) == {"runtime_s", "edges", "dense"} | (set() if name == "nfdepth" else {"nfdepth_at_shared_edges"})
         assert set(entry["edges"]) == keys and set(entry["dense"]) == keys
@@ -336,6 +396,10 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
         assert entry["dense"]["median_rel"] < 0.1
         # whole-pixel labels of 5..14 px: a perfect estimate would score a median of 1/4 px over ~8 px
         assert 0.02 < entry["dense"]["truth_rounding_rel"] < 0.05
+        # bad-1px is the mixture of its two parts
+        d = entry["dense"]
+        mix = d["near_steps_share"] * d["bad_1px_near_steps"] + (1 - d["near_steps_share"]) * d["bad_1px_off_steps"]
+        assert mix == pytest.approx(d["bad_1px"], abs=1e-12)
     assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3
 
 
@@ -358,7 +422,9 @@ def test_nfdepth_is_also_scored_on_the_points_a_peer_shares(monkeypatch):
     for peer in ("sgbm", "waxman_sinha"):
         shared = res["methods"][peer]["nfdepth_at_shared_edges"]
         mask = edges & np.isfinite(res["maps"][peer])
-        assert shared == disparity_errors(res["maps"]["nfdepth"], truth, mask=mask)
+        expected = disparity_errors(res["maps"]["nfdepth"], truth, mask=mask, near_steps=depth_step_mask(truth))
+        assert shared.keys() == expected.keys()
+        assert all(shared[k] == expected[k] or (math.isnan(shared[k]) and math.isnan(expected[k])) for k in expected)
         assert shared["points"] == res["methods"][peer]["edges"]["points"]
     n_edges = res["methods"]["nfdepth"]["edges"]["points"]
     assert 0 < res["methods"]["sgbm"]["nfdepth_at_shared_edges"]["points"] < n_edges

@@ -63,12 +63,17 @@ def _fmt_table(res) -> str:
     def pct(x, digits=1):
         return "     -" if x is None or x != x else f"{100 * x:5.{digits}f}%"
 
+    share = res.get("near_steps_share")
     lines = [
         f"{res['scene']}: {res['view_count']} views {res['views']}, reference view {res['reference_index']}, "
         f"{res['shape'][1]}x{res['shape'][0]} px" + (f" (downsampled {res['downsample']}x)" if res["downsample"] > 1 else "")
         + f", {res['truth_points']} ground-truth pixels"
-        + (f" stored in steps of {res['truth_step_px']:g} px" if res.get("truth_step_px") else ""),
-        f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} {'bias px':>7} {'runtime':>8}",
+        + (f" stored in steps of {res['truth_step_px']:g} px" if res.get("truth_step_px") else "")
+        + (f"; {pct(share).strip()} of them near a depth step" if share is not None and math.isfinite(share) else ""),
+        (
+            f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
+            f"{'bias px':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
+        ),
     ]
     for method, label, e, runtime_s in evaluation_rows(res):
         label = f"{method} ({label})"
@@ -76,7 +81,8 @@ def _fmt_table(res) -> str:
         lines.append(
             f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e.get('truth_rounding_rel'), 2):>8} "
             f"{pct(e['p90_rel'], 2):>7} {pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} "
-            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {runtime_s:>7.3f}s"
+            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
+            f"{runtime_s:>7.3f}s"
         )
     return "\n".join(lines)
 

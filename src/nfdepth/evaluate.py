@@ -1,7 +1,8 @@
 """nfdepth against ground truth and against its peers on the real data sets.
 
 :func:`disparity_errors` scores one disparity map (with the floor that the
-truth's own rounding sets, :func:`rounding_median_rel`);
+truth's own rounding sets, :func:`rounding_median_rel`, and bad-1px split
+at and away from the truth's depth steps, :func:`depth_step_mask`);
 :func:`photometric_truth_offset` checks a truth against the images, with no
 stereo method; :func:`evaluate_scene`
 runs nfdepth's :func:`nfdepth.stereo.static_stereo` and the peers of
@@ -39,11 +40,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ._validate import check_int, check_positive_finite
+
 __all__ = [
     "METHODS",
     "DEFAULT_METHODS",
     "disparity_errors",
     "rounding_median_rel",
+    "depth_step_mask",
     "photometric_truth_offset",
     "select_views",
     "evaluate_scene",
@@ -57,13 +61,16 @@ __all__ = [
 
 METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")
 DEFAULT_METHODS = ("nfdepth", "sgbm", "waxman_sinha")
-_ERROR_KEYS = ("points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel")
+_ERROR_KEYS = (
+    "points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
+    "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+)
 
 
 # ------------------------------------------------------------------ one map
 
 
-def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
+def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_steps=None) -> dict:
     """Error figures of a disparity map against the ground truth.
 
     Parameters
@@ -76,6 +83,9 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
         The step in which the truth is stored or labelled
         (:attr:`nfdepth.datasets.MultiViewScene.truth_step_px`); gives
         ``truth_rounding_rel``.
+    near_steps : array_like of bool, shape (H, W), optional
+        Pixels near the truth's depth steps (:func:`depth_step_mask`); gives
+        the bad-1px rate at and away from them.
 
     Returns
     -------
@@ -91,7 +101,10 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
         above the truth); ``truth_rounding_rel``: the ``median_rel`` that a
         perfect estimate is expected to score on the same points against a
         truth rounded to ``truth_step_px`` (:func:`rounding_median_rel`),
-        NaN without a step.
+        NaN without a step; ``near_steps_share``: the share of points in
+        ``near_steps``, ``bad_1px_near_steps`` / ``bad_1px_off_steps``: the
+        bad-1px rate of the points in / outside it (NaN without
+        ``near_steps`` or for an empty part).
         Figures of an empty set are NaN (``density`` too when the truth is
         empty).
     """
@@ -107,11 +120,9 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
         raise ValueError(msg)
     has_truth = np.isfinite(tru)
     if mask is not None:
-        m = np.asarray(mask)
-        if m.shape != tru.shape:
-            msg = f"mask must have the shape of truth {tru.shape}, got {m.shape}"
-            raise ValueError(msg)
-        has_truth &= m.astype(bool)
+        has_truth &= _bool_map("mask", mask, tru.shape)
+    if near_steps is not None:
+        near_steps = _bool_map("near_steps", near_steps, tru.shape)
     both = has_truth & np.isfinite(est)
     n_truth = int(has_truth.sum())
     n = int(both.sum())
@@ -130,7 +141,70 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None) -> dict:
     out["mae_px"] = float(np.mean(err))
     out["bias_px"] = float(np.median(signed))
     out["truth_rounding_rel"] = rounding_median_rel(t, truth_step_px) if truth_step_px is not None else math.nan
+    out.update({key: math.nan for key in _ERROR_KEYS[-3:]})
+    if near_steps is not None:
+        near = near_steps[both]
+        out["near_steps_share"] = float(np.mean(near))
+        bad = err > 1.0
+        if near.any():
+            out["bad_1px_near_steps"] = float(np.mean(bad[near]))
+        if not near.all():
+            out["bad_1px_off_steps"] = float(np.mean(bad[~near]))
     return out
+
+
+def _bool_map(name: str, value, shape) -> np.ndarray:
+    m = np.asarray(value)
+    if m.shape != shape:
+        msg = f"{name} must have the shape of truth {shape}, got {m.shape}"
+        raise ValueError(msg)
+    return m.astype(bool)
+
+
+def depth_step_mask(truth, *, gap_px: float = 2.0, width_px: int = 9) -> np.ndarray:
+    """Pixels near a depth step of the truth: Middlebury's "disc" regions.
+
+    A step is a pair of 4-neighbours, both with a finite truth, whose
+    disparities differ by more than ``gap_px``; the mask is every pixel of
+    such a pair dilated by a ``width_px`` x ``width_px`` square (Scharstein &
+    Szeliski, IJCV 2002: gap 2 px, width 9). There, an edge point is on an
+    occluding contour whose position the truth and the images may place a
+    pixel or two apart, so bad-1px near steps largely measures that
+    placement; away from them it measures the matching.
+
+    Parameters
+    ----------
+    truth : array_like, shape (H, W)
+        True disparity (px); NaN where unknown (unknown pixels make no step).
+    gap_px : float
+        Disparity difference between neighbours that makes a step (> 0).
+    width_px : int
+        Odd side of the square the steps are dilated by (>= 1).
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+    """
+    import cv2
+
+    tru = np.asarray(truth, dtype=np.float64)
+    if tru.ndim != 2:
+        msg = f"truth must be a 2-D disparity map, got shape {tru.shape}"
+        raise ValueError(msg)
+    gap_px = check_positive_finite("gap_px", gap_px)
+    width_px = check_int("width_px", width_px, 1)
+    if width_px % 2 == 0:
+        msg = f"width_px must be odd, got {width_px}"
+        raise ValueError(msg)
+    step = np.zeros(tru.shape, np.uint8)
+    with np.errstate(invalid="ignore"):
+        across_cols = np.abs(np.diff(tru, axis=1)) > gap_px  # NaN compares False: unknown makes no step
+        across_rows = np.abs(np.diff(tru, axis=0)) > gap_px
+    step[:, 1:] |= across_cols
+    step[:, :-1] |= across_cols
+    step[1:, :] |= across_rows
+    step[:-1, :] |= across_rows
+    return cv2.dilate(step, np.ones((width_px, width_px), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
 
 
 def rounding_median_rel(truth, step_px) -> float:
@@ -362,9 +436,11 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         ``scene``, ``views`` (indices into the scene's row), ``view_count``,
         ``reference_index`` (into the row), ``downsample``, ``shape``,
         ``truth_points``, ``truth_step_px`` (the scene's, after view
-        selection and downsampling) and ``methods``: method -> ``{"runtime_s",
-        "dense": errors, "edges": errors or None}`` (errors as
-        :func:`disparity_errors`); a peer scored at nfdepth's edge points also
+        selection and downsampling), ``near_steps_share`` (the share of the
+        truth's pixels near its depth steps, :func:`depth_step_mask`) and
+        ``methods``: method -> ``{"runtime_s", "dense": errors, "edges":
+        errors or None}`` (errors as :func:`disparity_errors`, split at the
+        depth steps); a peer scored at nfdepth's edge points also
         has ``"nfdepth_at_shared_edges"``: nfdepth's errors at those of its
         edge points where the peer has a value (the same points as the peer's
         ``"edges"`` figures).
@@ -389,6 +465,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         sub = datasets.downsample_scene(sub, k)
     truth = sub.disparity
     step = sub.truth_step_px
+    steps = depth_step_mask(truth)
     max_disp = float(np.nanmax(truth)) if np.any(np.isfinite(truth)) else None
     out = {
         "scene": scene.name,
@@ -399,6 +476,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         "shape": list(sub.shape),
         "truth_points": int(np.isfinite(truth).sum()),
         "truth_step_px": step,
+        "near_steps_share": float(np.mean(steps[np.isfinite(truth)])) if np.isfinite(truth).any() else math.nan,
         "methods": {},
     }
     maps = {}
@@ -409,8 +487,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         edge_points = np.asarray(res.edge_mask, bool) & np.isfinite(d)
         out["methods"]["nfdepth"] = {
             "runtime_s": float(res.runtime_s),
-            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step),
-            "dense": disparity_errors(d, truth, truth_step_px=step),
+            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step, near_steps=steps),
+            "dense": disparity_errors(d, truth, truth_step_px=step, near_steps=steps),
         }
         maps["nfdepth"] = d
     for m in methods:
@@ -419,14 +497,14 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         r = _run_peer(m, sub, max_disp)
         out["methods"][m] = {
             "runtime_s": float(r.runtime_s),
-            "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points, truth_step_px=step),
-            "dense": disparity_errors(r.disparity, truth, truth_step_px=step),
+            "edges": None if edge_points is None else disparity_errors(r.disparity, truth, mask=edge_points, truth_step_px=step, near_steps=steps),
+            "dense": disparity_errors(r.disparity, truth, truth_step_px=step, near_steps=steps),
         }
         if edge_points is not None:
             # nfdepth on exactly the edge points where the peer has a value too:
             # the same point set on both sides (a peer may leave the hard ones out)
             shared = edge_points & np.isfinite(np.asarray(r.disparity, dtype=np.float64))
-            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared, truth_step_px=step)
+            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared, truth_step_px=step, near_steps=steps)
         maps[m] = r.disparity
     if keep_maps:
         out["maps"] = maps
@@ -567,8 +645,9 @@ def render_markdown(results) -> str:
     if isinstance(results, dict):
         results = [results]
     head = (
-        "| scene | views | method | points | density | median rel | truth rounding | p90 rel | bad >1 px | bad >0.5 px | MAE px | bias px | runtime s |\n"
-        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| scene | views | method | points | density | median rel | truth rounding | p90 rel | bad >1 px | bad >0.5 px | MAE px | bias px "
+        "| near a depth step | bad >1 px near / off steps | runtime s |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     )
     lines = [head]
     for res in results:
@@ -577,7 +656,8 @@ def render_markdown(results) -> str:
             lines.append(
                 f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
                 f"{_rel(e['median_rel'])} | {_rel(e.get('truth_rounding_rel'))} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | "
-                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {rt:.3f} |"
+                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {_pct(e.get('near_steps_share'))} | "
+                f"{_pct(e.get('bad_1px_near_steps'))} / {_pct(e.get('bad_1px_off_steps'))} | {rt:.3f} |"
             )
     return "\n".join(lines)
 
