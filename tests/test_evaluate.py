@@ -316,6 +316,14 @@ def test_evaluate_scene_shape_and_table(tmp_path):
     # peers are scored at exactly nfdepth's edge points
     assert res["methods"]["waxman_sinha"]["edges"]["truth_points"] == res["methods"]["nfdepth"]["edges"]["points"]
     assert res["methods"]["waxman_sinha"]["dense"]["median_rel"] < 0.03
+    # whole-pixel shifts of one texture (3 px per view): nfdepth and SGBM match exactly at their
+    # edge points (measured 0 and 0.04 % bad-0.5px), so any wiring error (view order, reference,
+    # spacing, scale) shows; a constant or doubled disparity fails every bound
+    for method in ("nfdepth", "sgbm"):
+        e = res["methods"][method]["edges"]
+        assert e["points"] > 1000
+        assert e["median_rel"] < 0.005 and e["bad_0_5px"] < 0.01, method
+    assert res["methods"]["nfdepth"]["dense"]["median_rel"] < 0.01
     table = render_markdown(res)
     assert table.count("\n") == 7 and "sgbm (at nfdepth edges)" in table
     png = error_map_png(tmp_path / "e.png", res["maps"]["sgbm"], res["truth"])

@@ -158,6 +158,38 @@ def test_atomic_write_unwritable_directory(tmp_path):
         ro.chmod(0o700)
 
 
+def test_atomic_write_refused_directory_any_user(tmp_path, monkeypatch):
+    """The same error path for every user (root may write anywhere): the OS refuses the temporary file."""
+    import errno
+    import tempfile
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    with pytest.raises(OutputWriteError, match="cannot write .*z.bin.*Permission denied"):
+        atomic_write(tmp_path / "z.bin", lambda fh: fh.write(b"1"))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_full_disk_leaves_nothing(tmp_path):
+    """A write that fails half way (disk full) leaves neither the target nor the temporary file."""
+    import errno
+
+    def half_then_full(fh):
+        fh.write(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(OutputWriteError, match="No space left on device"):
+        atomic_write(tmp_path / "z.bin", half_then_full)
+    assert list(tmp_path.iterdir()) == []
+    # an existing file survives a failed replacement untouched
+    (tmp_path / "z.bin").write_bytes(b"old")
+    with pytest.raises(OutputWriteError):
+        atomic_write(tmp_path / "z.bin", half_then_full, force=True)
+    assert [p.name for p in tmp_path.iterdir()] == ["z.bin"] and (tmp_path / "z.bin").read_bytes() == b"old"
+
+
 def test_atomic_write_file_mode_follows_umask(tmp_path):
     p = atomic_write(tmp_path / "m.bin", lambda fh: fh.write(b"abc"))
     mask = os.umask(0o022)

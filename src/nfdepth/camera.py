@@ -41,6 +41,15 @@ class PinholeCamera:
     cx_px, cy_px : float, optional
         Principal point (column, row) in pixels; default the image centre
         ``((W-1)/2, (H-1)/2)``.
+
+    Examples
+    --------
+    >>> cam = PinholeCamera(focal_px=100.0, width_px=65, height_px=49)
+    >>> cam.cx_px, cam.cy_px
+    (32.0, 24.0)
+    >>> rows, cols, z = cam.project([[0.5, -0.25, 2.0]])  # x = 0.25, y = -0.125
+    >>> float(rows[0]), float(cols[0]), float(z[0])
+    (11.5, 57.0, 2.0)
     """
 
     focal_px: float
@@ -188,7 +197,16 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
 
 
 def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: RigidMotion):
-    """Normal flow ``Vn = u cos(alpha) + v sin(alpha)`` in px per unit time (eq. 3)."""
+    """Normal flow ``Vn = u cos(alpha) + v sin(alpha)`` in px per unit time (eq. 3).
+
+    A camera moving right at 2 units per unit time sees a point 400 units
+    ahead at the principal point move left at ``f Vx / Z = 100 * -2 / 400``:
+
+    >>> cam = PinholeCamera(focal_px=100.0, width_px=65, height_px=49)
+    >>> motion = RigidMotion.camera_translation((2.0, 0.0, 0.0))
+    >>> float(normal_flow_px(cam, 24.0, 32.0, 400.0, 0.0, motion))
+    -0.5
+    """
     fu, fv = image_flow_px(camera, rows, cols, depth, motion)
     return fu * np.cos(alpha) + fv * np.sin(alpha)
 

@@ -191,6 +191,11 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
 
     ``Z = f dVx cos(alpha) / dVn`` (``dVx`` in scene units per unit time,
     ``dVn`` in px per unit time); NaN where ``Z`` would not be positive.
+
+    >>> float(depth_x_translation(-0.5, 0.0, focal_px=100.0, delta_vx=-2.0))  # the flow of normal_flow_px's example
+    400.0
+    >>> float(depth_x_translation(0.5, 0.0, focal_px=100.0, delta_vx=-2.0))  # would be behind the camera
+    nan
     """
     f = check_positive_finite("focal_px", focal_px)
     delta_vx = check_nonzero_finite("delta_vx", delta_vx, what="a non-zero finite translation")
