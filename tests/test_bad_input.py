@@ -377,7 +377,7 @@ def test_frames_above_the_pixel_limit_are_refused(monkeypatch):
     with pytest.raises(_validate.ImageTooLargeError) as info:
         nf.normal_flow([huge] * 3)
     msg = str(info.value)
-    assert "frames[0] has 7072x7072 = 50.0 megapixels, above the limit of 40 megapixels per frame" in msg
+    assert "frames[0] has 7072x7072 px (width x height) = 50.0 megapixels, above the limit of 40 megapixels per frame" in msg
     assert "NFDEPTH_MAX_PIXELS" in msg
     assert isinstance(info.value, ValueError)
     with pytest.raises(_validate.ImageTooLargeError, match="views\\[0\\] has 7072x7072"):
@@ -573,7 +573,7 @@ def test_cli_image_too_large(tmp_path, views_on_disk, capfd, monkeypatch):
     code, out, err = run_cli(capfd, "stereo", *views_on_disk, "--out", tmp_path / "o.pfm")
     assert code == 2
     assert err.strip().splitlines() == [err.strip()]
-    assert "has 48x64 = 0.0 megapixels, above the limit of 0.001 megapixels per frame" in err
+    assert "has 64x48 px (width x height) = 0.0 megapixels, above the limit of 0.001 megapixels per frame" in err
     assert not (tmp_path / "o.pfm").exists()
 
 
@@ -601,13 +601,16 @@ def test_cli_force_replaces(tmp_path, views_on_disk, capfd):
 
 
 def test_cli_debug_shows_the_traceback(tmp_path, capfd):
-    with pytest.raises(ImageReadError, match="no such file"):
-        main(["--debug", "view", str(tmp_path / "nope.pfm")])
+    """--debug adds the traceback; the last line and the exit code stay those of a plain run."""
+    code = main(["--debug", "view", str(tmp_path / "nope.pfm")])
+    assert code == 3
+    assert "Traceback" in capfd.readouterr().err
     res = subprocess.run(
         [sys.executable, "-m", "nfdepth", "--debug", "view", str(tmp_path / "nope.pfm")], capture_output=True, text=True, check=False
     )
-    assert res.returncode != 0
+    assert res.returncode == 3
     assert "Traceback" in res.stderr and "ImageReadError: cannot read image" in res.stderr
+    assert res.stderr.strip().splitlines()[-1] == f"nfdepth: error: cannot read image '{tmp_path / 'nope.pfm'}': no such file"
     res = subprocess.run([sys.executable, "-m", "nfdepth", "view", str(tmp_path / "nope.pfm")], capture_output=True, text=True, check=False)
     assert res.returncode == 3
     assert res.stderr.strip().splitlines() == [f"nfdepth: error: cannot read image '{tmp_path / 'nope.pfm'}': no such file"]

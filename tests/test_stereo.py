@@ -183,10 +183,36 @@ def test_invalid_where_there_is_no_texture():
     assert np.all(np.isin(r.reason[20:-20, 2:20], (Reason.UNDETERMINABLE, Reason.UNCERTAIN)))
 
 
+def test_textureless_background_next_to_an_object_is_not_filled():
+    """The bundled pyramid on a uniform background: the matching window would carry the object's
+    disparity across the background (before dense_reach_px: 1393 background pixels 10 px or more
+    from the object had a finite value, with a std of ~0.03 px). Within reach (4 px) of the object's
+    own gradients only; the edge points are untouched."""
+    from nfdepth.synthetic import BACKGROUND_INTENSITY, paper_static_sequence
+
+    scene = paper_static_sequence()
+    background = scene.frames[1] == BACKGROUND_INTENSITY
+    far = ndimage.distance_transform_edt(background) > 10  # the object's blurred edge reaches ~3 px, plus the reach
+    r = static_stereo(scene.frames, reference=1)
+    assert far.sum() > 5000
+    assert not np.isfinite(r.disparity[far]).any()
+    assert np.all(r.reason[far] != Reason.OK)
+    unlimited = static_stereo(scene.frames, reference=1, dense_reach_px=np.inf)
+    assert np.isfinite(unlimited.disparity[far]).sum() > 1000  # the rule is what removes them
+    np.testing.assert_array_equal(r.edge_mask, unlimited.edge_mask)
+    edges = r.edge_mask & np.isfinite(r.disparity)
+    np.testing.assert_array_equal(r.disparity[edges], unlimited.disparity[edges])
+    # reach 0: only pixels with their own information; a larger reach keeps a superset
+    own_only = static_stereo(scene.frames, reference=1, dense_reach_px=0.0)
+    assert np.all(np.isfinite(r.disparity)[np.isfinite(own_only.disparity)])
+
+
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
         ({"views": "one"}, "views"),
+        ({"dense_reach_px": -1.0}, "dense_reach_px must be a number >= 0"),
+        ({"dense_reach_px": float("nan")}, "dense_reach_px must be a number >= 0"),
         ({"reference": 3}, "reference"),
         ({"reference": -1}, "reference"),
         ({"positions": (0, 1)}, "positions"),

@@ -59,7 +59,7 @@ def check_frame_size(name: str, shape) -> None:
     limit = max_pixels()
     if pixels > limit:
         msg = (
-            f"{name} has {shape[0]}x{shape[1]} = {pixels / 1e6:.1f} megapixels, above the limit of "
+            f"{name} has {shape[1]}x{shape[0]} px (width x height) = {pixels / 1e6:.1f} megapixels, above the limit of "
             f"{limit / 1e6:g} megapixels per frame (working memory is about 130-370 bytes per pixel); "
             f"downsample the images or raise the limit with the environment variable {MAX_PIXELS_ENV}"
         )
@@ -100,6 +100,11 @@ def check_nonnegative_finite(name: str, value) -> float:
 def check_nonzero_finite(name: str, value, *, what: str = "a non-zero finite number") -> float:
     """Return ``value`` as float, or raise if it is not a finite, non-zero number."""
     return _check_number(name, value, what, lambda x: np.isfinite(x) and x != 0)
+
+
+def check_reach(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a number >= 0 (``inf`` allowed: no limit)."""
+    return _check_number(name, value, "a number >= 0 (inf: no limit)", lambda x: x >= 0)
 
 
 def check_int(name: str, value, minimum: int) -> int:

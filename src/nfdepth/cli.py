@@ -25,6 +25,7 @@ import json
 import signal
 import sys
 import threading
+import traceback
 import warnings
 from pathlib import Path
 
@@ -519,7 +520,7 @@ def _main(argv, debug: bool) -> int:
         return EXIT_INTERRUPTED
     except CLIError as exc:
         if debug:
-            raise
+            traceback.print_exc(file=sys.stderr)
         text = " ".join(str(exc).split())
         for prefix in ("nfdepth: ", "nfdepth "):  # argparse's "PROG: message"
             if text.startswith(prefix):
@@ -528,8 +529,8 @@ def _main(argv, debug: bool) -> int:
         print(f"nfdepth: error: {text}", file=sys.stderr)
         return exc.code
     except Exception as exc:  # noqa: BLE001 - the CLI's single error boundary
-        if debug:
-            raise
+        if debug:  # the traceback, then the same line and exit code as without --debug
+            traceback.print_exc(file=sys.stderr)
         code = _classify(exc)
         text = " ".join(str(exc).split()) or type(exc).__name__
         if code == EXIT_INTERNAL:

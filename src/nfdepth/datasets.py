@@ -127,7 +127,7 @@ def data_root(path=None) -> Path:
         Naming every place tried, how to set ``NFDEPTH_DATA`` and how to
         download the data (``nfdepth fetch-data``).
     """
-    hint = f"set {ENV_VAR}=/path/to/shared/data or pass root=..., or download the data with `nfdepth fetch-data`"
+    hint = f"set {ENV_VAR}=/path/to/shared/data or pass the folder (--data DIR; root=... in Python), or download the data with `nfdepth fetch-data`"
     if path is not None:
         p = Path(path).expanduser()
         if p.is_dir():

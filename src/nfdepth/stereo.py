@@ -138,6 +138,17 @@ sum (t_k - tbar)^2``. With three or more views the least-squares residuals
 measure the model error: the variance is scaled by the local reduced chi^2
 when it exceeds 1. Dense pixels get the normalised-convolution variance,
 corrected for the spatial correlation of the smoothed noise.
+
+That variance counts the information anywhere in the window, so it stays
+small for a pixel in a textureless region next to a strong edge, whose
+value is only the edge's carried over (measured on the bundled pyramid
+example: 2864 pixels of its uniform background, 5-20 px from the object,
+got finite disparities of -0.23 to 4 px with a std of 0.03-0.09 px). A
+dense pixel is therefore ``UNDETERMINABLE`` unless a pixel with
+information of its own (single-pixel std within ``max_std_px``) lies
+within ``dense_reach_px`` (default 4 px, the normalised-convolution
+window's sigma). On the real scenes this costs 0-1.1 % of the dense
+coverage and lowers or keeps the dense bad-1px rate (three views).
 """
 
 from __future__ import annotations
@@ -151,7 +162,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
-from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_reach, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -698,6 +709,15 @@ def _occluded_side(d, image, rows, cols, step_px, reach=_SIDE_REACH, direction=N
     return step & (near_right != looks_right)
 
 
+def _within_reach(own: np.ndarray, reach_px: float) -> np.ndarray:
+    """Pixels within ``reach_px`` (Euclidean) of a pixel of ``own``."""
+    r = int(np.floor(reach_px))
+    if r == 0:
+        return own.copy()
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    return cv2.dilate(own.astype(np.uint8), disk, borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+
+
 def _active_views(t, ref, level, levels):
     """Views used at ``level``: the nearest on each side at the coarsest, the span doubling per finer level.
 
@@ -750,6 +770,7 @@ def static_stereo(
     dense_window_px: float = 4.0,
     select_window_px: float = 2.0,
     max_std_px: float = 1.0,
+    dense_reach_px: float = 4.0,
     max_edge_std_px: float = 0.15,
     median_px: int = 5,
     view_schedule: bool = True,
@@ -834,6 +855,12 @@ def static_stereo(
     max_std_px : float
         Dense pixels whose predicted std (px per unit position) exceeds this
         are ``UNCERTAIN`` (NaN).
+    dense_reach_px : float
+        Dense pixels farther than this (px) from every pixel with information
+        of its own (a column gradient whose single-pixel std would be within
+        ``max_std_px``) are ``UNDETERMINABLE`` (NaN): the matching window
+        would only carry a neighbour's value into them, e.g. across a
+        textureless background next to an object (``inf``: no limit).
     max_edge_std_px : float
         The same bound for edge points. Their std includes the model error
         (reduced chi^2 of the multi-view fit), which is what flags edge
@@ -939,6 +966,7 @@ def static_stereo(
     dense_window_px = check_positive_finite("dense_window_px", dense_window_px)
     select_window_px = check_positive_finite("select_window_px", select_window_px)
     max_std_px = check_positive_finite("max_std_px", max_std_px)
+    dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
     for name, value in (("max_edge_std_px", max_edge_std_px), ("max_edge_disagreement_px", max_edge_disagreement_px)):
         if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) and value > 0):
             msg = f"{name} must be a number > 0 (inf: no limit), got {value!r}"
@@ -1110,6 +1138,8 @@ def static_stereo(
         reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
+    if np.isfinite(dense_reach_px):
+        reason[(reason == Reason.OK) & ~_within_reach(m.grad_col**2 * m.s_tt >= (s_c / max_std_px) ** 2, dense_reach_px)] = Reason.UNDETERMINABLE
 
     er, ec = np.nonzero(edge_mask)
     disparity = d.copy()
