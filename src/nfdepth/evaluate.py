@@ -136,7 +136,8 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
     rel = err[t > 0] / t[t > 0]
     out["median_rel"] = float(np.median(rel)) if rel.size else math.nan
     out["p90_rel"] = float(np.percentile(rel, 90)) if rel.size else math.nan
-    out["bad_1px"] = float(np.mean(err > 1.0))
+    bad = err > 1.0
+    out["bad_1px"] = float(np.mean(bad))
     out["bad_0_5px"] = float(np.mean(err > 0.5))
     out["mae_px"] = float(np.mean(err))
     out["bias_px"] = float(np.median(signed))
@@ -145,7 +146,6 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
     if near_steps is not None:
         near = near_steps[both]
         out["near_steps_share"] = float(np.mean(near))
-        bad = err > 1.0
         if near.any():
             out["bad_1px_near_steps"] = float(np.mean(bad[near]))
         if not near.all():
@@ -466,7 +466,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     truth = sub.disparity
     step = sub.truth_step_px
     steps = depth_step_mask(truth)
-    max_disp = float(np.nanmax(truth)) if np.any(np.isfinite(truth)) else None
+    known = np.isfinite(truth)
+    max_disp = float(np.nanmax(truth)) if known.any() else None
     out = {
         "scene": scene.name,
         "views": idx,
@@ -474,9 +475,9 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         "reference_index": full_ref,
         "downsample": k,
         "shape": list(sub.shape),
-        "truth_points": int(np.isfinite(truth).sum()),
+        "truth_points": int(known.sum()),
         "truth_step_px": step,
-        "near_steps_share": float(np.mean(steps[np.isfinite(truth)])) if np.isfinite(truth).any() else math.nan,
+        "near_steps_share": float(np.mean(steps[known])) if known.any() else math.nan,
         "methods": {},
     }
     maps = {}

@@ -1120,9 +1120,9 @@ def static_stereo(
         )
     h, w = d.shape
     reason = np.full((h, w), Reason.OK, np.uint8)
+    info = m.grad_col**2 * m.s_tt  # each pixel's own information (inverse variance times s_c^2)
     if cost_volume:
         # the dense field now rests on the cost aggregation window: its information
-        info = m.grad_col**2 * m.s_tt
         box_n = float((2 * cost_radius + 1) ** 2)
         dof = np.maximum(m.dof, 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -1139,7 +1139,7 @@ def static_stereo(
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
     if np.isfinite(dense_reach_px):
-        reason[(reason == Reason.OK) & ~_within_reach(m.grad_col**2 * m.s_tt >= (s_c / max_std_px) ** 2, dense_reach_px)] = Reason.UNDETERMINABLE
+        reason[(reason == Reason.OK) & ~_within_reach(info >= (s_c / max_std_px) ** 2, dense_reach_px)] = Reason.UNDETERMINABLE
 
     er, ec = np.nonzero(edge_mask)
     disparity = d.copy()
