@@ -63,8 +63,11 @@ def test_disparity_errors_exact_values():
     assert math.isnan(e["truth_rounding_rel"])  # no step given
     stepped = disparity_errors(est, truth, truth_step_px=0.5)
     assert stepped["truth_rounding_rel"] == pytest.approx(rounding_median_rel(truth[np.isfinite(est) & np.isfinite(truth)], 0.5))
-    with pytest.raises(ValueError, match="truth_step_px"):
-        disparity_errors(est, truth, truth_step_px=-1.0)
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="truth_step_px must be a finite number >= 0 or None"):
+            disparity_errors(est, truth, truth_step_px=bad)
+    with pytest.raises(TypeError, match="truth_step_px must be a finite number >= 0 or None, got 'fine'"):
+        disparity_errors(est, truth, truth_step_px="fine")
 
 
 def test_rounding_floor_of_one_disparity_is_a_quarter_step():
@@ -286,8 +289,11 @@ def test_photometric_truth_offset_bad_input():
     for bad in (2, 5, -1, True, 1.0):
         with pytest.raises(ValueError, match="view must be an index"):
             photometric_truth_offset(scene, bad)
-    with pytest.raises(ValueError, match="search_px"):
-        photometric_truth_offset(scene, 1, search_px=0.0)
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="search_px must be a positive finite number"):
+            photometric_truth_offset(scene, 1, search_px=bad)
+    with pytest.raises(TypeError, match="search_px must be a positive finite number, got 'far'"):
+        photometric_truth_offset(scene, 1, search_px="far")
     flat = dataclasses.replace(scene, views=[np.full_like(v, 100.0) for v in scene.views])
     with pytest.raises(ValueError, match="smooth, textured pixels"):
         photometric_truth_offset(flat, 1)

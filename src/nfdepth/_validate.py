@@ -107,6 +107,11 @@ def check_reach(name: str, value) -> float:
     return _check_number(name, value, "a number >= 0 (inf: no limit)", lambda x: x >= 0)
 
 
+def check_positive_or_inf(name: str, value) -> float:
+    """Return ``value`` as float, or raise if it is not a number > 0 (``inf`` allowed: no limit)."""
+    return _check_number(name, value, "a number > 0 (inf: no limit)", lambda x: x > 0)
+
+
 def check_int(name: str, value, minimum: int) -> int:
     """Return ``value`` as int, or raise if it is not an integer >= ``minimum`` (bools refused)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):

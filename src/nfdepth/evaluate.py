@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import check_int, check_positive_finite
+from ._validate import _check_number, check_int, check_positive_finite
 
 __all__ = [
     "METHODS",
@@ -109,10 +109,7 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
         empty).
     """
     if truth_step_px is not None:
-        truth_step_px = float(truth_step_px)
-        if not (math.isfinite(truth_step_px) and truth_step_px >= 0):
-            msg = f"truth_step_px must be a finite number >= 0 or None, got {truth_step_px!r}"
-            raise ValueError(msg)
+        truth_step_px = _check_number("truth_step_px", truth_step_px, "a finite number >= 0 or None", lambda x: math.isfinite(x) and x >= 0)
     est = np.asarray(estimate, dtype=np.float64)
     tru = np.asarray(truth, dtype=np.float64)
     if est.shape != tru.shape:
@@ -300,9 +297,7 @@ def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gr
     if isinstance(view, bool) or not isinstance(view, (int, np.integer)) or not 0 <= view < n or view == ref:
         msg = f"view must be an index into the scene's {n} views other than the reference {ref}, got {view!r}"
         raise ValueError(msg)
-    if not (math.isfinite(search_px) and search_px > 0):
-        msg = f"search_px must be a finite number > 0, got {search_px!r}"
-        raise ValueError(msg)
+    search_px = check_positive_finite("search_px", search_px)
     steps = int(view) - ref
     # both smoothed alike (1 px Gaussian): the shift is unchanged, the bicubic
     # interpolation error of fine texture (a bias at fractional shifts) drops

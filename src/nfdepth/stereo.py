@@ -192,7 +192,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
-from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_reach, float_dtype
+from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -1004,11 +1004,8 @@ def static_stereo(
     select_window_px = check_positive_finite("select_window_px", select_window_px)
     max_std_px = check_positive_finite("max_std_px", max_std_px)
     dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
-    for name, value in (("max_edge_std_px", max_edge_std_px), ("max_edge_disagreement_px", max_edge_disagreement_px)):
-        if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) and value > 0):
-            msg = f"{name} must be a number > 0 (inf: no limit), got {value!r}"
-            raise ValueError(msg)
-    max_edge_std_px, max_edge_disagreement_px = float(max_edge_std_px), float(max_edge_disagreement_px)
+    max_edge_std_px = check_positive_or_inf("max_edge_std_px", max_edge_std_px)
+    max_edge_disagreement_px = check_positive_or_inf("max_edge_disagreement_px", max_edge_disagreement_px)
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
