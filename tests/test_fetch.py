@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import http.server
-import os
 import re
 import socket
 import sys
@@ -25,12 +24,15 @@ from nfdepth import datasets as D
 from nfdepth import fetch as F
 from nfdepth.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _shared_data() -> Path | None:
-    env = os.environ.get("NFDEPTH_DATA")
-    folder = Path(env) if env else ROOT.parent / "shared" / "data"
+    from nfdepth.datasets import DataNotFoundError, data_root
+
+    try:
+        folder = data_root()
+    except DataNotFoundError:
+        return None
     if all((folder / name / "SHA256SUMS").is_file() and (folder / name / "SOURCE.md").is_file() for name in F.DATA_SETS):
         return folder
     return None

@@ -36,25 +36,25 @@ def workdir(tmp_path_factory):
     return work
 
 
-def _has_data() -> bool:
+def _data_folder() -> Path | None:
+    """Where the library finds the data (nfdepth.datasets.data_root), or None."""
     from nfdepth.datasets import DataNotFoundError, data_root
 
     try:
-        data_root()
+        return data_root()
     except DataNotFoundError:
-        return False
-    return True
+        return None
 
 
 @pytest.mark.parametrize("command", readme_commands())
 def test_readme_command_runs(workdir, command):
-    if " evaluate " in f" {command} " and not _has_data():
+    data = _data_folder()
+    if " evaluate " in f" {command} " and data is None:
         pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
     argv = shlex.split(command)
     env = dict(os.environ)
-    env.setdefault("NFDEPTH_DATA", str(ROOT.parent / "shared" / "data"))
-    if not Path(env["NFDEPTH_DATA"]).is_dir():
-        env.pop("NFDEPTH_DATA")
+    if data is not None:  # the commands run elsewhere (a temporary folder): name the data the tests found
+        env["NFDEPTH_DATA"] = str(data)
     res = subprocess.run([sys.executable, "-m", "nfdepth", *argv[1:]], cwd=workdir, capture_output=True, text=True, env=env, check=False)
     assert res.returncode == 0, f"{command}\n{res.stderr}"
     assert "Traceback" not in res.stderr

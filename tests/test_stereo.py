@@ -1,8 +1,6 @@
 """Coarse-to-fine multi-view static stereo (nfdepth.stereo)."""
 
 import itertools
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -315,9 +313,13 @@ def test_bad_input(kwargs, match):
 
 
 def _data_root():
-    env = os.environ.get("NFDEPTH_DATA")
-    root = Path(env) if env else Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    return root.resolve()
+    """Where the library finds the data (nfdepth.datasets.data_root), or skip."""
+    from nfdepth.datasets import DataNotFoundError, data_root
+
+    try:
+        return data_root()
+    except DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
 
 
 @pytest.mark.data
