@@ -223,7 +223,9 @@ class StereoResult:
         far point), not clamped.
     uncertainty : ndarray, float32, shape (H, W)
         Standard deviation of ``disparity`` (px per unit position), NaN where
-        unknown.
+        unknown: image noise and model error at the edge points; on dense
+        pixels also the cost volume's sub-sample bias and any bias the edge
+        points show nearby (module docstring, "Uncertainty").
     edge_mask : ndarray of bool, shape (H, W)
         Strong zero-crossing, non-corner edge points at the finest level (the
         paper's sparse output), pixel-centred.
