@@ -112,6 +112,14 @@ def check_positive_or_inf(name: str, value) -> float:
     return _check_number(name, value, "a number > 0 (inf: no limit)", lambda x: x > 0)
 
 
+def check_bool(name: str, value) -> bool:
+    """Return ``value`` as bool, or raise TypeError if it is not True or False (NumPy's bool too)."""
+    if not isinstance(value, (bool, np.bool_)):
+        msg = f"{name} must be True or False, got {value!r}"
+        raise TypeError(msg)
+    return bool(value)
+
+
 def check_int(name: str, value, minimum: int) -> int:
     """Return ``value`` as int, or raise if it is not an integer >= ``minimum`` (bools refused)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._validate import check_bool
+
 __all__ = [
     "BaselineResult",
     "sgbm_disparity",
@@ -349,9 +351,7 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
     if method not in ("dis", "farneback"):
         msg = f"method must be 'dis' or 'farneback', got {method!r}"
         raise ValueError(msg)
-    if not isinstance(chain, (bool, np.bool_)):
-        msg = f"chain must be True or False, got {chain!r}"
-        raise TypeError(msg)
+    chain = check_bool("chain", chain)
     pos = np.arange(n, dtype=float) if positions is None else np.asarray(positions, dtype=float)
     if pos.shape != (n,) or not np.all(np.isfinite(pos)) or not np.all(np.diff(pos) > 0):
         msg = f"positions must be {n} strictly increasing finite numbers, got {positions!r}"

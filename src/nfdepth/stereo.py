@@ -140,6 +140,17 @@ measure the model error: the variance is scaled by the local reduced chi^2
 when it exceeds 1. Dense pixels get the normalised-convolution variance,
 corrected for the spatial correlation of the smoothed noise.
 
+That variance counts the information anywhere in the window, so it stays
+small for a pixel in a textureless region next to a strong edge, whose
+value is only the edge's carried over (measured on the bundled pyramid
+example: 2864 pixels of its uniform background, 5-20 px from the object,
+got finite disparities of -0.23 to 4 px with a std of 0.03-0.09 px). A
+dense pixel is therefore ``UNDETERMINABLE`` unless a pixel with
+information of its own (single-pixel std within ``max_std_px``) lies
+within ``dense_reach_px`` (default 4 px, the normalised-convolution
+window's sigma). On the real scenes this costs 0-1.1 % of the dense
+coverage and lowers or keeps the dense bad-1px rate (three views).
+
 With the cost volume (default) a dense pixel's variance is the information
 summed over the cost window, plus two terms the window's information does
 not show:
@@ -168,17 +179,6 @@ views; the truth's own 1/8 px rounding and offset included): Moebius 2.46
 -> 0.80, Art 1.40 -> 0.67, Teddy 1.35 -> 0.59 (Tsukuba's whole-pixel labels:
 4.8 -> 1.7). The differential dense field (``cost_volume=False``) keeps the
 normalised-convolution variance.
-
-That variance counts the information anywhere in the window, so it stays
-small for a pixel in a textureless region next to a strong edge, whose
-value is only the edge's carried over (measured on the bundled pyramid
-example: 2864 pixels of its uniform background, 5-20 px from the object,
-got finite disparities of -0.23 to 4 px with a std of 0.03-0.09 px). A
-dense pixel is therefore ``UNDETERMINABLE`` unless a pixel with
-information of its own (single-pixel std within ``max_std_px``) lies
-within ``dense_reach_px`` (default 4 px, the normalised-convolution
-window's sigma). On the real scenes this costs 0-1.1 % of the dense
-coverage and lowers or keeps the dense bad-1px rate (three views).
 """
 
 from __future__ import annotations
@@ -192,7 +192,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
-from ._validate import as_frames, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, float_dtype
+from ._validate import as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -1011,10 +1011,8 @@ def static_stereo(
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
-    for name, value in (("view_schedule", view_schedule), ("cost_volume", cost_volume)):
-        if not isinstance(value, (bool, np.bool_)):
-            msg = f"{name} must be True or False, got {value!r}"
-            raise TypeError(msg)
+    view_schedule = check_bool("view_schedule", view_schedule)
+    cost_volume = check_bool("cost_volume", cost_volume)
     if aggregation not in ("guided", "gaussian"):
         msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
         raise ValueError(msg)
@@ -1185,7 +1183,8 @@ def static_stereo(
         def at_points(per_view):  # the per-view maps (reference: None) at the edge points
             return None if per_view is None else [None if a is None else a[er, ec] for a in per_view]
 
-        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d[er, ec], at_points(m.weights), edge_iterations, at_points(m.offsets))
+        d_dense_e = d[er, ec]  # the dense field at the edge points
+        d_e, g_e, stt_e, chi2_e, dof_e, cnt_e = _refine_edges(smoothed, t, ref, er, ec, d_dense_e, at_points(m.weights), edge_iterations, at_points(m.offsets))
         with np.errstate(divide="ignore", invalid="ignore"):
             g_mag = np.hypot(m.grad_col[er, ec], m.grad_row[er, ec])
             cos = np.abs(m.grad_col[er, ec]) / g_mag
@@ -1204,7 +1203,7 @@ def static_stereo(
         r_e[(r_e == Reason.OK) & (std_e > max_edge_std_px)] = Reason.UNCERTAIN
         # consistency with the dense (propagated) field: a point-wise estimate that
         # left its neighbourhood's disparity straddles a depth step or an occlusion
-        r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d[er, ec]) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
+        r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d_dense_e) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
         if cost_volume and edge_cost_margin > 0:
             r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
         if edge_step_px > 0:
@@ -1221,7 +1220,7 @@ def static_stereo(
             ok_e = r_e == Reason.OK
             sq = np.zeros((h, w), np.float32)
             cnt = np.zeros((h, w), np.float32)
-            sq[er[ok_e], ec[ok_e]] = (d_e[ok_e] - d[er[ok_e], ec[ok_e]]) ** 2 - std_e[ok_e] ** 2
+            sq[er[ok_e], ec[ok_e]] = (d_e[ok_e] - d_dense_e[ok_e]) ** 2 - std_e[ok_e] ** 2
             cnt[er[ok_e], ec[ok_e]] = 1.0
             with np.errstate(divide="ignore", invalid="ignore"):
                 bias2 = _box(sq, cost_radius) / _box(cnt, cost_radius)
