@@ -5,6 +5,7 @@ import itertools
 import numpy as np
 import pytest
 from scipy import ndimage
+from textured_planes import slanted_plane_views as _slanted_plane_views
 
 from nfdepth.depth import Reason
 from nfdepth.stereo import StereoResult, auto_levels, static_stereo
@@ -169,29 +170,6 @@ def test_uncertainty_is_calibrated_on_noisy_views():
     assert 1 / 1.5 <= ratio <= 1.5, ratio
     # and the estimate is unbiased within its spread
     assert abs(np.nanmedian(runs[:, sel]) - d0) < 0.5 * np.median(predicted) + 0.01
-
-
-def _slanted_plane_views(d0, slope, *, shape=(96, 160), noise=2.0, seed=3, min_wavelength_px=6.0):
-    """Three views (reference the middle) of a plane with disparity ``d0 + slope * col``,
-    textured with a sum of sinusoids (wavelengths 6-30 px) evaluated exactly at every
-    pixel: view ``s = -1, 0, 1`` at column ``c'`` sees reference column ``c`` with
-    ``c' = c - s d(c)``."""
-    rng = np.random.default_rng(seed)
-    n = 40
-    wavelength = rng.uniform(min_wavelength_px, 30.0, n)
-    angle = rng.uniform(0.0, np.pi, n)
-    ky, kx = 2.0 * np.pi * np.sin(angle) / wavelength, 2.0 * np.pi * np.cos(angle) / wavelength
-    phase = rng.uniform(0.0, 2.0 * np.pi, n)
-    rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]].astype(float)
-
-    def texture(r, c):
-        return 100.0 + 40.0 / np.sqrt(n / 2) * np.sin(ky * r[..., None] + kx * c[..., None] + phase).sum(-1)
-
-    views = []
-    for s in (-1, 0, 1):
-        c_ref = (cols + s * d0) / (1.0 - s * slope)
-        views.append((texture(rows, c_ref) + rng.normal(0.0, noise, shape)).astype(np.float32))
-    return views, d0 + slope * cols
 
 
 @pytest.mark.parametrize(("slope", "noise"), [(0.0125, 0.5), (0.0125, 2.0), (0.03, 0.5), (0.03, 2.0)])

@@ -18,7 +18,8 @@ Depth solvers (eq. 4-6) and fusion
 Pipelines (sections 2.3, 3.2, 3.3)
     dynamic_stereo, static_stereo_edges, EdgeDepth
 Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
-    static_stereo, StereoResult
+    static_stereo, StereoResult; x and y baselines together:
+    static_stereo_xy, XYStereoResult
 Files
     read_image, write_array, write_colormap_png, read_pfm, write_pfm,
     write_ply, depth_to_points
@@ -29,7 +30,8 @@ imported on first use, so ``import nfdepth`` stays light):
 ==========================  ================================================
 command                     functions
 ==========================  ================================================
-``nfdepth stereo``          static_stereo; with ``--rig``: load_rig,
+``nfdepth stereo``          static_stereo; with ``--column``:
+                            static_stereo_xy; with ``--rig``: load_rig,
                             stereo_options_from_rig
 ``nfdepth dynamic I1..I5``  load_rig, dynamic_stereo_from_rig, edge_depth_maps
 ``nfdepth dynamic``         load_rig, read_video, dynamic_stereo_from_videos
@@ -82,6 +84,7 @@ from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gra
 from .io import depth_to_points, read_image, read_pfm, write_array, write_colormap_png, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
 from .stereo import StereoResult, static_stereo
+from .xy_stereo import XYStereoResult, static_stereo_xy
 
 __version__ = "0.1.0"
 
@@ -170,6 +173,8 @@ __all__ = [
     "static_stereo_edges",
     "EdgeDepth",
     "static_stereo",
+    "static_stereo_xy",
+    "XYStereoResult",
     "StereoResult",
     "read_image",
     "write_array",

@@ -242,6 +242,11 @@ def _cmd_demo(args) -> int:
         return path
 
     names = [write_png16(example / f"pyramid_view{k}.png", f) for k, f in enumerate(scene.frames)]
+    # A column through the same reference camera (moving toward +Y): with the
+    # row, x and y baselines together (`nfdepth stereo ... --column`).
+    column = static_sequence(paper_pyramid(), scene.camera, n_views=3, camera_step=(0.0, 2.0, 0.0))
+    for k in (0, 2):
+        write_png16(example / f"pyramid_column{k}.png", column.frames[k])
     for k, frame in enumerate(results["exp1"].scene.frames, 1):
         write_png16(example / f"dynamic_I{k}.png", frame)
     # A camera on a rail passing the still pyramid, 1 unit per frame along +X
@@ -326,6 +331,18 @@ def _cmd_stereo(args) -> int:
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
+    column = args.column or []
+    if not column and (args.column_reference is not None or args.column_positions is not None):
+        raise CLIError("--column-reference and --column-positions need --column (the views of the vertical line)")
+    column_reference = None
+    if column:
+        if args.axis != "x":
+            raise CLIError("--column needs the main views to be the horizontal row (--axis x); the column is the vertical line")
+        if len(column) < 2:
+            raise CLIError(f"--column needs at least 2 views (3 or more recommended), got {len(column)}")
+        column_reference = len(column) // 2 if args.column_reference is None else args.column_reference
+        if not 0 <= column_reference < len(column):
+            raise CLIError(f"--column-reference must index one of the {len(column)} column views (0..{len(column) - 1}), got {column_reference}")
     outputs = [_check_output(args.out, force=args.force)]
     if args.uncertainty:
         outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty"))
@@ -340,10 +357,16 @@ def _cmd_stereo(args) -> int:
     if len({str(p.resolve()) for p in every}) != len(every):
         raise CLIError("output paths must differ from each other")
     views = [read_image(v) for v in args.views]
-    shapes = {v.shape for v in views}
+    column_views = [read_image(v) for v in column]
+    shapes = {v.shape for v in views + column_views}
     if len(shapes) > 1:
-        listed = ", ".join(f"{Path(p).name} {v.shape[1]}x{v.shape[0]}" for p, v in zip(args.views, views))
+        listed = ", ".join(f"{Path(p).name} {v.shape[1]}x{v.shape[0]}" for p, v in zip(args.views + column, views + column_views))
         raise CLIError(f"all views must have the same size, got {listed}")
+    if column and not np.array_equal(views[reference], column_views[column_reference]):
+        raise CLIError(
+            f"the row's reference view ({Path(args.views[reference]).name}) and the column's ({Path(column[column_reference]).name}) "
+            "must be the same image: both lines pass through the reference camera"
+        )
     if rig is not None:
         rig.check_image_shape(views[0].shape)
     options = {}
@@ -353,9 +376,23 @@ def _cmd_stereo(args) -> int:
         options["levels"] = args.levels
     if args.threads is not None:
         options["threads"] = args.threads
-    result = static_stereo(
-        views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
-    )
+    if column:
+        from .xy_stereo import static_stereo_xy
+
+        result = static_stereo_xy(
+            views,
+            column_views,
+            row_reference=reference,
+            column_reference=column_reference,
+            row_positions=args.positions,
+            column_positions=args.column_positions,
+            edges_only=args.edges_only,
+            **options,
+        )
+    else:
+        result = static_stereo(
+            views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
+        )
     values = result.disparity
     std = result.uncertainty
     unit = "px"
@@ -382,9 +419,13 @@ def _cmd_stereo(args) -> int:
     write_figures(figures, values, std, title=f"view {reference} ({Path(args.views[reference]).name})", unit=unit, quantity=kind)
     finite = values[valid]
     rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} {unit}" if finite.size else "none"
+    fused = ""
+    if column:
+        both = int(np.count_nonzero(valid & (result.axis_count == 2)))
+        fused = f", row and column fused ({both} pixels from both)"
     print(
         f"{kind} for view {reference} ({Path(args.views[reference]).name}): {int(valid.sum())} of {valid.size} pixels"
-        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels -> {outputs[0]}"
+        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels{fused} -> {outputs[0]}"
     )
     return EXIT_OK
 
@@ -444,12 +485,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-compare", action="store_true", help="skip the literal-stencil comparison column")
     p.set_defaults(func=_cmd_reproduce)
 
-    p = sub.add_parser("stereo", help="depth/disparity from a row of static views (coarse-to-fine, multi-view)")
+    p = sub.add_parser("stereo", help="depth/disparity from a row of static views (coarse-to-fine, multi-view; --column adds a y baseline)")
     p.add_argument("views", nargs="+", metavar="VIEW", help="image files, ordered so the camera moves toward +X (or +Y) first to last")
     p.add_argument("--reference", type=int, default=None, metavar="K", help="0-based index of the view to compute (default: the middle one)")
     p.add_argument("--out", required=True, metavar="FILE", help="output .pfm, .tif or .npy (NaN where unknown)")
     p.add_argument("--positions", type=float, nargs="+", metavar="P", help="camera positions in units of the baseline (default 0 1 2 ...)")
     p.add_argument("--axis", choices=("x", "y"), default="x", help="direction of the row (default x)")
+    p.add_argument(
+        "--column",
+        nargs="+",
+        metavar="VIEW",
+        help="x and y baselines together: views along a vertical line through the same reference camera, ordered so the camera moves toward +Y (down) first to last; fused with the row per pixel",
+    )
+    p.add_argument("--column-reference", type=int, default=None, metavar="K", help="0-based index of the reference view in --column (default: the middle one)")
+    p.add_argument("--column-positions", type=float, nargs="+", metavar="P", help="camera positions along the column, in the unit of --positions (default 0 1 2 ...)")
     p.add_argument("--focal-px", type=float, metavar="F", help="focal length in pixels (with --baseline: output depth)")
     p.add_argument("--baseline", type=float, metavar="B", help="distance between neighbouring views (scene units)")
     p.add_argument("--edges-only", action="store_true", help="the paper's sparse output: edge points only")

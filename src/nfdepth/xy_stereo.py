@@ -1,0 +1,224 @@
+"""Static stereo with x and y baselines together: a row and a column of views.
+
+An edge parallel to the baseline does not move along its normal, so one row
+of views cannot measure it (``B = 0`` in eq. 4; ``Reason.UNDETERMINABLE``
+below ``min_cos``), and an edge at a small angle to it is measured with the
+weight ``cos^2``. The paper's own suggested fix is a second baseline at right
+angles: a column of views through the same reference camera (a plus-shaped
+rig, or the middle row and column of a camera grid) measures the same edge
+with the weight ``sin^2``.
+
+:func:`static_stereo_xy` runs :func:`nfdepth.static_stereo` along the row
+(``axis="x"``) and along the column (``axis="y"``) and combines the two per
+pixel by weighted least squares on inverse depth (disparity ``d = f b / Z``
+per unit of position is inverse depth up to the factor ``f b``, the same on
+both axes when both lists of positions are in the same unit). Each axis's
+estimate is itself the weighted least-squares solution of its own relative
+normal flows (eq. 4 / 6), with the variance ``sigma^2``; the two sets of
+measurements are independent, so the joint solution over every relative
+normal flow of the point is the inverse-variance mean
+
+.. math::
+    \\hat d = \\frac{d_x / \\sigma_x^2 + d_y / \\sigma_y^2}{1 / \\sigma_x^2 + 1 / \\sigma_y^2},
+    \\qquad \\sigma^2 = \\frac{\\max(1, \\chi^2)}{1 / \\sigma_x^2 + 1 / \\sigma_y^2},
+    \\qquad \\chi^2 = \\frac{(d_x - d_y)^2}{\\sigma_x^2 + \\sigma_y^2},
+
+the variance scaled by the reduced chi^2 of the two when they disagree more
+than their errors allow (as :func:`nfdepth.static_stereo` does with its own
+residuals). A pixel measured along one axis only keeps that axis's value and
+standard deviation. Where the two disagree both beyond
+``max_axis_disagreement_px`` and beyond three standard deviations of their
+difference (typically a depth step, which the row and the column see
+occluded on different sides), the pixel is ``Reason.UNCERTAIN``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import as_frames, check_positive_or_inf
+from .depth import Reason
+from .stereo import StereoResult, static_stereo
+
+__all__ = ["XYStereoResult", "static_stereo_xy"]
+
+#: Where neither axis has a value: the reason reported, most specific first
+#: (an axis that measured the point but doubted it says more than one that
+#: could not measure it at all).
+_REASON_PRIORITY = (Reason.UNCERTAIN, Reason.NOT_POSITIVE, Reason.NO_DATA, Reason.UNDETERMINABLE, Reason.CORNER, Reason.NOT_EDGE)
+
+#: Variance floor (px^2) for the weights: a std of exactly 0 (``noise_std=0``
+#: on noise-free input) would give an infinite weight.
+_MIN_VARIANCE = 1e-12
+
+# options that belong to one axis: the row's and column's own arguments
+_PER_AXIS = ("views", "reference", "positions", "axis")
+
+
+@dataclass(frozen=True)
+class XYStereoResult(StereoResult):
+    """A :class:`~nfdepth.stereo.StereoResult` fused from a row and a column of views.
+
+    ``disparity`` (px per unit of position), ``uncertainty``, ``edge_mask``
+    (edge points of either axis) and ``reason`` are the fused maps; ``row``
+    and ``column`` are the two axes' own results (the column's in the
+    reference image's orientation), ``axis_count`` the number of axes that
+    measured each pixel (0, 1 or 2) and ``conflict`` the pixels where both
+    did and disagreed (``Reason.UNCERTAIN``). ``runtime_s`` covers both
+    axes and the fusion; ``noise_std`` is the row's.
+    """
+
+    row: StereoResult | None = None
+    column: StereoResult | None = None
+    axis_count: np.ndarray | None = None
+    conflict: np.ndarray | None = None
+
+
+def _merged_reason(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per pixel, the more specific of two non-OK reasons (:data:`_REASON_PRIORITY`)."""
+    rank = np.zeros(256, np.uint8)
+    for i, code in enumerate(_REASON_PRIORITY):
+        rank[int(code)] = len(_REASON_PRIORITY) - i
+    return np.where(rank[a] >= rank[b], a, b).astype(np.uint8)
+
+
+def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_px: float = 0.5):
+    """Fuse two disparity maps of one reference view (module docstring).
+
+    Returns ``(disparity, uncertainty, reason, axis_count, conflict)``:
+    float32 maps with NaN where no value, uint8 reasons, the number of axes
+    with a value, and the pixels refused for disagreeing.
+    """
+    limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
+    if row.disparity.shape != column.disparity.shape:
+        msg = f"the row's and the column's maps must have one shape, got {row.disparity.shape} and {column.disparity.shape}"
+        raise ValueError(msg)
+    ok_x = row.reason == Reason.OK
+    ok_y = column.reason == Reason.OK
+    both = ok_x & ok_y
+    dx = np.where(ok_x, row.disparity, 0.0).astype(np.float64)
+    dy = np.where(ok_y, column.disparity, 0.0).astype(np.float64)
+    vx = np.maximum(np.where(ok_x, row.uncertainty, 1.0).astype(np.float64) ** 2, _MIN_VARIANCE)
+    vy = np.maximum(np.where(ok_y, column.uncertainty, 1.0).astype(np.float64) ** 2, _MIN_VARIANCE)
+    wx, wy = 1.0 / vx, 1.0 / vy
+    diff = dx - dy
+    chi2 = diff**2 / (vx + vy)
+    fused = (wx * dx + wy * dy) / (wx + wy)
+    fused_var = np.maximum(chi2, 1.0) / (wx + wy)
+    disparity = np.where(both, fused, np.where(ok_x, dx, dy))
+    variance = np.where(both, fused_var, np.where(ok_x, vx, vy))
+    conflict = both & (np.abs(diff) > limit) & (chi2 > 9.0)
+    reason = np.where(ok_x | ok_y, np.uint8(Reason.OK), _merged_reason(row.reason, column.reason)).astype(np.uint8)
+    reason[conflict] = Reason.UNCERTAIN
+    bad = reason != Reason.OK
+    disparity = np.where(bad, np.nan, disparity).astype(np.float32)
+    std = np.where(bad, np.nan, np.sqrt(variance)).astype(np.float32)
+    count = (ok_x.astype(np.uint8) + ok_y.astype(np.uint8)).astype(np.uint8)
+    return disparity, std, reason, count, conflict
+
+
+def static_stereo_xy(
+    row_views,
+    column_views,
+    *,
+    row_reference: int,
+    column_reference: int,
+    row_positions=None,
+    column_positions=None,
+    max_axis_disagreement_px: float = 0.5,
+    **options,
+) -> XYStereoResult:
+    """Disparity of one reference view from a row and a column of views (x and y baselines).
+
+    Parameters
+    ----------
+    row_views : sequence of >= 2 ndarray (H, W)
+        Views along a horizontal line, ordered so that the camera moves
+        toward +X from first to last (as :func:`nfdepth.static_stereo`).
+    column_views : sequence of >= 2 ndarray (H, W)
+        Views along a vertical line through the same reference camera,
+        ordered so that the camera moves toward +Y (image rows down) from
+        first to last: scene points shift toward -row.
+    row_reference, column_reference : int
+        Index of the shared reference view in each list; the two must be the
+        same image (pixel for pixel).
+    row_positions, column_positions : sequence of float, optional
+        Camera positions along each line, **in one unit for both** (default:
+        equally spaced, step 1, i.e. the row's and the column's neighbour
+        spacing are assumed equal). The output is disparity per unit of
+        position, so give both when the spacings differ.
+    max_axis_disagreement_px : float
+        A pixel measured on both axes whose two disparities differ by more
+        than this and by more than three standard deviations of their
+        difference is ``UNCERTAIN`` (``inf``: never).
+    **options
+        Any other keyword argument of :func:`nfdepth.static_stereo`
+        (``edges_only``, ``sigma_px``, ``levels``, ``noise_std``, ``threads``,
+        ...), used for both axes.
+
+    Returns
+    -------
+    XYStereoResult
+        The fused maps, with the two axes' own results in ``row`` and
+        ``column``.
+
+    Raises
+    ------
+    ValueError
+        The two reference views differ or have different shapes, an option
+        meant per axis is given in ``options``, or any check of
+        :func:`nfdepth.static_stereo` fails (the message says which axis).
+    """
+    start = time.perf_counter()
+    clash = sorted(k for k in options if k in _PER_AXIS)
+    if clash:
+        msg = f"{', '.join(clash)} belong to one axis: use row_views / column_views, row_reference / column_reference and row_positions / column_positions"
+        raise TypeError(msg)
+    limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
+    rows = as_frames("row_views", row_views, min_count=2, dtype=np.float32)
+    cols = as_frames("column_views", column_views, min_count=2, dtype=np.float32)
+    for name, ref, seq in (("row_reference", row_reference, rows), ("column_reference", column_reference, cols)):
+        if isinstance(ref, bool) or not isinstance(ref, (int, np.integer)):
+            msg = f"{name} must be an int view index, got {ref!r}"
+            raise TypeError(msg)
+        if not 0 <= int(ref) < len(seq):
+            msg = f"{name} must be a view index in 0..{len(seq) - 1}, got {ref!r}"
+            raise ValueError(msg)
+    ref_x, ref_y = rows[int(row_reference)], cols[int(column_reference)]
+    if ref_x.shape != ref_y.shape:
+        msg = f"the row's and the column's views must have one size, got {ref_x.shape} and {ref_y.shape}"
+        raise ValueError(msg)
+    if not np.array_equal(ref_x, ref_y):
+        msg = (
+            "the row's reference view and the column's must be the same image (the camera both lines pass through), "
+            f"but they differ at {int(np.count_nonzero(ref_x != ref_y))} pixels"
+        )
+        raise ValueError(msg)
+    results = {}
+    for axis, views, ref, positions in (("x", rows, row_reference, row_positions), ("y", cols, column_reference, column_positions)):
+        try:
+            results[axis] = static_stereo(views, reference=int(ref), positions=positions, axis=axis, **options)
+        except (TypeError, ValueError) as exc:
+            if type(exc) not in (TypeError, ValueError):
+                raise
+            which = "row" if axis == "x" else "column"
+            raise type(exc)(f"{which}: {exc}") from exc
+    row, column = results["x"], results["y"]
+    disparity, std, reason, count, conflict = fuse_axes(row, column, max_axis_disagreement_px=limit)
+    edge_mask = row.edge_mask | column.edge_mask
+    return XYStereoResult(
+        disparity=disparity,
+        uncertainty=std,
+        edge_mask=edge_mask,
+        reason=reason,
+        levels=row.levels,
+        runtime_s=time.perf_counter() - start,
+        noise_std=row.noise_std,
+        row=row,
+        column=column,
+        axis_count=count,
+        conflict=conflict,
+    )
