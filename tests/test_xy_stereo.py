@@ -273,3 +273,32 @@ def test_cli_stereo_column_errors(cross_files, tmp_path, capsys, extra, message)
     assert code == 2
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
     assert not out.exists()
+
+
+def test_cli_fill_writes_a_complete_map_and_marks_the_filled_pixels(cross_files, tmp_path, capsys):
+    """`--fill`: every pixel of a line with a value gets one; `--fill-mask` says which were
+    filled (1) or measured (0); the uncertainty stays NaN at the filled ones."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_image, read_pfm
+
+    names, _ = cross_files
+    row = [names["row", k] for k in range(3)]
+    out, std, mask = tmp_path / "d.pfm", tmp_path / "s.pfm", tmp_path / "m.npy"
+    code = main(["stereo", *row, "--edges-only", "--fill", "--fill-mask", str(mask), "--out", str(out), "--uncertainty", str(std)])
+    printed, err = capsys.readouterr()
+    assert code == 0, err
+    lib = static_stereo([read_image(p) for p in row], reference=1, edges_only=True)
+    filled, where = lib.filled()
+    got, m, s = read_pfm(out), np.load(mask), read_pfm(std)
+    np.testing.assert_array_equal(got, filled)
+    lines = np.isfinite(lib.disparity).any(axis=1)
+    assert lines.sum() > 0.6 * lines.size
+    assert np.isfinite(got[lines]).all() and np.isnan(got[~lines]).all() and where.sum() > 0.5 * got.size
+    np.testing.assert_array_equal(m, np.where(np.isfinite(got), where, np.nan).astype(np.float32))
+    measured = np.isfinite(lib.disparity)
+    assert np.isnan(s[where]).all()
+    np.testing.assert_array_equal(s[measured], lib.uncertainty[measured])
+    assert f"{int(where.sum())} filled" in printed
+    code = main(["stereo", *row, "--fill-mask", str(tmp_path / "m2.npy"), "--out", str(tmp_path / "d2.pfm")])
+    _, err = capsys.readouterr()
+    assert code == 2 and "--fill-mask needs --fill" in err

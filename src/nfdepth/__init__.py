@@ -18,8 +18,8 @@ Depth solvers (eq. 4-6) and fusion
 Pipelines (sections 2.3, 3.2, 3.3)
     dynamic_stereo, static_stereo_edges, EdgeDepth
 Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
-    static_stereo, StereoResult; x and y baselines together:
-    static_stereo_xy, XYStereoResult
+    static_stereo, StereoResult, fill_background; x and y baselines
+    together: static_stereo_xy, XYStereoResult
 Files
     read_image, write_array, write_colormap_png, read_pfm, write_pfm,
     write_ply, depth_to_points
@@ -83,7 +83,7 @@ from .edges import EdgeSelection, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, normal_flow
 from .io import depth_to_points, read_image, read_pfm, write_array, write_colormap_png, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
-from .stereo import StereoResult, static_stereo
+from .stereo import StereoResult, fill_background, static_stereo
 from .xy_stereo import XYStereoResult, static_stereo_xy
 
 __version__ = "0.1.0"
@@ -174,6 +174,7 @@ __all__ = [
     "EdgeDepth",
     "static_stereo",
     "static_stereo_xy",
+    "fill_background",
     "XYStereoResult",
     "StereoResult",
     "read_image",

@@ -344,8 +344,12 @@ def _cmd_stereo(args) -> int:
         if not 0 <= column_reference < len(column):
             raise CLIError(f"--column-reference must index one of the {len(column)} column views (0..{len(column) - 1}), got {column_reference}")
     outputs = [_check_output(args.out, force=args.force)]
+    if args.fill_mask and not args.fill:
+        raise CLIError("--fill-mask needs --fill")
     if args.uncertainty:
         outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty"))
+    if args.fill_mask:
+        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask"))
     if args.preview:
         outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview"))
     if args.ply:
@@ -393,6 +397,12 @@ def _cmd_stereo(args) -> int:
         result = static_stereo(
             views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
         )
+    filled = None
+    if args.fill:
+        from dataclasses import replace
+
+        disparity, filled = result.filled()
+        result = replace(result, disparity=disparity)  # its uncertainty stays NaN where filled
     values = result.disparity
     std = result.uncertainty
     unit = "px"
@@ -407,6 +417,9 @@ def _cmd_stereo(args) -> int:
     if args.uncertainty:
         write_array(outputs[k], std.astype(np.float32), force=args.force)
         k += 1
+    if args.fill_mask:
+        write_array(outputs[k], np.where(np.isfinite(values), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)
+        k += 1
     if args.preview:
         write_colormap_png(outputs[k], values, force=args.force)
         k += 1
@@ -419,13 +432,15 @@ def _cmd_stereo(args) -> int:
     write_figures(figures, values, std, title=f"view {reference} ({Path(args.views[reference]).name})", unit=unit, quantity=kind)
     finite = values[valid]
     rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} {unit}" if finite.size else "none"
-    fused = ""
+    notes = ""
+    if filled is not None:
+        notes += f", {int(np.count_nonzero(filled & valid))} filled"
     if column:
         both = int(np.count_nonzero(valid & (result.axis_count == 2)))
-        fused = f", row and column fused ({both} pixels from both)"
+        notes += f", row and column fused ({both} pixels from both)"
     print(
         f"{kind} for view {reference} ({Path(args.views[reference]).name}): {int(valid.sum())} of {valid.size} pixels"
-        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels{fused} -> {outputs[0]}"
+        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels{notes} -> {outputs[0]}"
     )
     return EXIT_OK
 
@@ -502,6 +517,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--focal-px", type=float, metavar="F", help="focal length in pixels (with --baseline: output depth)")
     p.add_argument("--baseline", type=float, metavar="B", help="distance between neighbouring views (scene units)")
     p.add_argument("--edges-only", action="store_true", help="the paper's sparse output: edge points only")
+    p.add_argument(
+        "--fill",
+        action="store_true",
+        help="fill the unknown pixels from the background (the farther of the nearest values along the baseline); filled pixels have no uncertainty (NaN)",
+    )
+    p.add_argument("--fill-mask", metavar="FILE", help="with --fill: also write where it filled (1 filled, 0 measured, NaN none; .pfm, .tif or .npy)")
     p.add_argument("--uncertainty", metavar="FILE", help="also write the per-pixel standard deviation here")
     p.add_argument("--preview", metavar="PNG", help="also write a colour-mapped PNG")
     p.add_argument("--ply", metavar="FILE", help="also write a coloured point cloud (needs --focal-px, --baseline)")

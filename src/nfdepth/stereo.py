@@ -197,7 +197,7 @@ from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
 
-__all__ = ["StereoResult", "static_stereo", "auto_levels"]
+__all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background"]
 
 # RMS over the sub-sample phase of the cost-volume winner's bias, in candidate
 # steps: the equiangular fit and the linear interpolation of the shifted views
@@ -237,6 +237,8 @@ class StereoResult:
         Wall-clock time of the estimate.
     noise_std : float
         Image noise std used (grey levels of the input).
+    axis : str
+        Direction of the baseline, "x" (a row of views) or "y" (a column).
     """
 
     disparity: np.ndarray
@@ -246,11 +248,27 @@ class StereoResult:
     levels: int
     runtime_s: float
     noise_std: float = 0.0
+    axis: str = "x"
 
     @property
     def valid(self) -> np.ndarray:
         """True where ``disparity`` holds a number."""
         return self.reason == Reason.OK
+
+    def filled(self) -> tuple[np.ndarray, np.ndarray]:
+        """The disparity with its holes filled from the background, and where it was filled.
+
+        :func:`fill_background` along this result's baseline. The filled
+        values are not measurements: ``disparity``, ``uncertainty`` and
+        ``reason`` are left as they are, and the returned mask marks them.
+
+        Returns
+        -------
+        (ndarray float32 (H, W), ndarray bool (H, W))
+            The filled disparity (NaN only where a whole line of the baseline
+            has no value) and the mask of filled pixels.
+        """
+        return fill_background(self.disparity, axis=self.axis)
 
     def depth(self, *, focal_px: float, baseline: float, disparity_offset_px: float = 0.0) -> np.ndarray:
         """Depth ``Z = f b / (d + offset)`` (paper eq. 6 with ``d = f b / Z``).
@@ -281,6 +299,53 @@ class StereoResult:
         with np.errstate(divide="ignore", invalid="ignore"):
             z = f * b / total
         return np.where(np.isfinite(total) & (total > 0), z, np.nan)
+
+
+def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarray]:
+    """Fill the unknown (NaN) pixels of a disparity map from the background.
+
+    Each unknown pixel takes the smaller (farther) of the nearest known
+    disparities on either side of it along the baseline: the row for
+    ``axis="x"``, the column for ``"y"``. A hole beside a depth step is
+    mostly the background's occluded strip, seen by the views on one side
+    only, and the foreground's value would fatten the object; inside a
+    surface the two neighbours agree anyway. Where only one side has a value,
+    it is taken; a line with no value at all stays NaN.
+
+    Parameters
+    ----------
+    disparity : array_like, shape (H, W)
+        Disparity, NaN where unknown.
+    axis : {"x", "y"}
+        Direction of the baseline.
+
+    Returns
+    -------
+    (ndarray float32, ndarray bool)
+        The filled map and the mask of the pixels that were filled.
+    """
+    if axis not in ("x", "y"):
+        msg = f"axis must be 'x' or 'y', got {axis!r}"
+        raise ValueError(msg)
+    d = np.asarray(disparity, dtype=np.float32)
+    if d.ndim != 2:
+        msg = f"disparity must be a 2-D map, got shape {d.shape}"
+        raise ValueError(msg)
+    lines = d if axis == "x" else d.T
+    known = np.isfinite(lines)
+    n = lines.shape[1]
+    pos = np.arange(n)
+    left = np.maximum.accumulate(np.where(known, pos, -1), axis=1)
+    right = np.minimum.accumulate(np.where(known, pos, n)[:, ::-1], axis=1)[:, ::-1]
+    line = np.arange(lines.shape[0])[:, None]
+    with np.errstate(invalid="ignore"):
+        from_left = np.where(left >= 0, lines[line, np.clip(left, 0, n - 1)], np.nan)
+        from_right = np.where(right < n, lines[line, np.clip(right, 0, n - 1)], np.nan)
+    out = np.where(known, lines, np.fmin(from_left, from_right)).astype(np.float32)
+    mask = ~known & np.isfinite(out)
+    if axis == "y":
+        out, mask = np.ascontiguousarray(out.T), np.ascontiguousarray(mask.T)
+    return out, mask
 
 
 def auto_levels(shape, *, min_size_px: int = 24) -> int:
@@ -1266,4 +1331,5 @@ def static_stereo(
         levels=levels,
         runtime_s=time.perf_counter() - start,
         noise_std=noise,
+        axis=axis,
     )
