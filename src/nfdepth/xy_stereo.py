@@ -43,7 +43,7 @@ from ._validate import as_frames, check_positive_or_inf
 from .depth import Reason
 from .stereo import StereoResult, static_stereo
 
-__all__ = ["XYStereoResult", "static_stereo_xy"]
+__all__ = ["XYStereoResult", "fuse_axes", "static_stereo_xy"]
 
 #: Where neither axis has a value: the reason reported, most specific first
 #: (an axis that measured the point but doubted it says more than one that
