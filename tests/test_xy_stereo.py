@@ -302,3 +302,31 @@ def test_cli_fill_writes_a_complete_map_and_marks_the_filled_pixels(cross_files,
     code = main(["stereo", *row, "--fill-mask", str(tmp_path / "m2.npy"), "--out", str(tmp_path / "d2.pfm")])
     _, err = capsys.readouterr()
     assert code == 2 and "--fill-mask needs --fill" in err
+
+
+def test_cli_column_positions_from_the_rig(cross_files, tmp_path, capsys):
+    """`[stereo] column_positions` reaches the fusion when --column is given, contradicting
+    --column-positions is an error, and without --column the row runs alone."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_image, read_pfm
+
+    names, _ = cross_files
+    rig = tmp_path / "rig.toml"
+    rig.write_text('[camera]\nfocal_px = 100.0\nwidth_px = 96\nheight_px = 64\n\n[stereo]\nbaseline = 1.0\naxis = "x"\ncolumn_positions = [0.0, 1.0, 2.5]\n')
+    row = [names["row", k] for k in range(3)]
+    col = [names["col", 0], names["row", 1], names["col", 2]]
+    out = tmp_path / "d.pfm"
+    code = main(["stereo", *row, "--column", *col, "--rig", str(rig), "--edges-only", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    lib = static_stereo_xy(
+        [read_image(p) for p in row], [read_image(p) for p in col], row_reference=1, column_reference=1, column_positions=[0.0, 1.0, 2.5], edges_only=True
+    )
+    np.testing.assert_array_equal(read_pfm(out), lib.depth(focal_px=100.0, baseline=1.0).astype(np.float32))
+    code = main(["stereo", *row, "--column", *col, "--column-positions", "0", "1", "2", "--rig", str(rig), "--out", str(tmp_path / "e.pfm")])
+    _, err = capsys.readouterr()
+    assert code == 2 and "contradicts the rig file's column_positions" in err
+    code = main(["stereo", *row, "--rig", str(rig), "--edges-only", "--out", str(tmp_path / "f.pfm")])
+    printed, err = capsys.readouterr()
+    assert code == 0, err
+    assert "fused" not in printed

@@ -312,7 +312,9 @@ def _cmd_stereo(args) -> int:
 
         rig = load_rig(args.rig)
         opts = stereo_options_from_rig(rig)
-        for key in ("focal_px", "baseline", "axis", "positions"):
+        for key in ("focal_px", "baseline", "axis", "positions", "column_positions"):
+            if key == "column_positions" and not args.column:
+                continue  # the rig's column is not in use
             given = getattr(args, key)
             if key == "axis" and given == "x":
                 given = None  # the parser's default: the rig decides

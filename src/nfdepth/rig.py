@@ -303,12 +303,16 @@ class StereoSpec:
         ``"x"`` or ``"y"`` when given as ``axis`` (else None).
     positions : tuple of float or None
         View positions in units of the baseline (strictly increasing).
+    column_positions : tuple of float or None
+        Positions of a column of views through the same reference camera
+        (``nfdepth stereo --column``), in the same unit.
     """
 
     baseline: float
     direction: np.ndarray
     axis: str | None = None
     positions: tuple | None = None
+    column_positions: tuple | None = None
 
     def __eq__(self, other) -> bool:
         return (
@@ -317,6 +321,7 @@ class StereoSpec:
             and np.array_equal(self.direction, other.direction)
             and self.axis == other.axis
             and self.positions == other.positions
+            and self.column_positions == other.column_positions
         )
 
 
@@ -486,7 +491,7 @@ def check_crossings(crossings) -> tuple:
 
 
 def _parse_stereo(table) -> StereoSpec:
-    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions"))
+    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions"))
     baseline = _number(t, "stereo", "baseline", positive=True)
     which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
     axis = None
@@ -500,15 +505,22 @@ def _parse_stereo(table) -> StereoSpec:
         if axis not in _AXES:
             raise _fail("stereo.axis", axis, '"x" or "y"')
         direction = _AXES[axis].copy()
-    positions = None
-    if "positions" in t:
-        p = t["positions"]
-        if not isinstance(p, list) or len(p) < 2 or not all(_is_number(v) and math.isfinite(v) for v in p):
-            raise _fail("stereo.positions", p, "a list of 2 or more finite numbers (units of the baseline)")
-        if not all(b > a for a, b in zip(p, p[1:])):
-            raise _fail("stereo.positions", p, "strictly increasing positions (views ordered along the baseline)")
-        positions = tuple(float(v) for v in p)
-    return StereoSpec(baseline, direction, axis, positions)
+    positions = _stereo_positions(t, "positions")
+    column_positions = _stereo_positions(t, "column_positions")
+    if column_positions is not None and not np.allclose(direction, _AXES["x"], atol=1e-9):
+        raise _fail("stereo.column_positions", t["column_positions"], 'a row along x (axis = "x"): the column is the vertical line through its reference')
+    return StereoSpec(baseline, direction, axis, positions, column_positions)
+
+
+def _stereo_positions(t: dict, key: str):
+    if key not in t:
+        return None
+    p = t[key]
+    if not isinstance(p, list) or len(p) < 2 or not all(_is_number(v) and math.isfinite(v) for v in p):
+        raise _fail(f"stereo.{key}", p, "a list of 2 or more finite numbers (units of the baseline)")
+    if not all(b > a for a, b in zip(p, p[1:])):
+        raise _fail(f"stereo.{key}", p, "strictly increasing positions (views ordered along the baseline)")
+    return tuple(float(v) for v in p)
 
 
 def _parse_video(table, base: Path | None) -> VideoSpec:
@@ -629,6 +641,8 @@ def rig_to_toml(rig: Rig) -> str:
         lines.append(f"axis = {_toml_value(s.axis)}" if s.axis else f"direction = {_toml_value(s.direction)}")
         if s.positions is not None:
             lines.append(f"positions = {_toml_value(s.positions)}")
+        if s.column_positions is not None:
+            lines.append(f"column_positions = {_toml_value(s.column_positions)}")
     if rig.video is not None:
         v = rig.video
         lines += ["", "[video]"]
@@ -648,7 +662,8 @@ def rig_to_toml(rig: Rig) -> str:
 def stereo_options_from_rig(rig: Rig) -> dict:
     """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
 
-    Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None)``.
+    Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
+    column_positions=list|None)``.
     :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
     a ``direction`` must be one of those.
     """
@@ -667,6 +682,7 @@ def stereo_options_from_rig(rig: Rig) -> dict:
         "baseline": float(s.baseline),
         "axis": axis,
         "positions": list(s.positions) if s.positions is not None else None,
+        "column_positions": list(s.column_positions) if s.column_positions is not None else None,
     }
 
 
