@@ -307,10 +307,16 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
     Each unknown pixel takes the smaller (farther) of the nearest known
     disparities on either side of it along the baseline: the row for
     ``axis="x"``, the column for ``"y"``. A hole beside a depth step is
-    mostly the background's occluded strip, seen by the views on one side
-    only, and the foreground's value would fatten the object; inside a
-    surface the two neighbours agree anyway. Where only one side has a value,
-    it is taken; a line with no value at all stays NaN.
+    often the background's occluded strip, seen by the views on one side
+    only, where the foreground's value would fatten the object; inside a
+    surface the two neighbours agree anyway. A hole on the foreground's own
+    contour gets the background too: the rule cannot tell the two apart.
+    Measured on the real scenes (three views), the filled pixels are 15-40 %
+    off by more than 1 px; the foreground neighbour does worse on every
+    Middlebury 2005 scene (34-76 %), the intensity-nearer one on four of
+    the five (27-49 %), and either is 2-8 points better on Teddy and
+    Tsukuba (README). Where only one side has a value, it is taken; a line
+    with no value at all stays NaN.
 
     Parameters
     ----------
