@@ -331,7 +331,9 @@ def test_evaluate_scene_shape_and_table(tmp_path):
         assert e["median_rel"] < 0.005 and e["bad_0_5px"] < 0.01, method
     assert res["methods"]["nfdepth"]["dense"]["median_rel"] < 0.01
     table = render_markdown(res)
-    assert table.count("\n") == 7 and "sgbm (at nfdepth edges)" in table
+    assert table.count("\n") == 8 and "sgbm (at nfdepth edges)" in table and "nfdepth (dense, filled)" in table
+    filled, dense = res["methods"]["nfdepth"]["filled"], res["methods"]["nfdepth"]["dense"]
+    assert filled["points"] >= dense["points"] and filled["density"] > 0.99
     png = error_map_png(tmp_path / "e.png", res["maps"]["sgbm"], res["truth"])
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     only = evaluate_scene(_synthetic_scene(), views="three", methods=["sgbm"])
@@ -403,7 +405,7 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     # Tsukuba's layers: about a sixth of the truth lies within 4 px of a step of more than 2 px
     assert 0.1 < res["near_steps_share"] < 0.25
     for name, entry in res["methods"].items():
-        assert set(entry) == {"runtime_s", "edges", "dense"} | (set() if name == "nfdepth" else {"nfdepth_at_shared_edges"})
+        assert set(entry) == {"runtime_s", "edges", "dense"} | ({"filled"} if name == "nfdepth" else {"nfdepth_at_shared_edges"})
         assert set(entry["edges"]) == keys and set(entry["dense"]) == keys
         assert 0 < entry["dense"]["density"] <= 1
         # every method is far better than chance on Tsukuba (disparity 5..14 px)

@@ -435,7 +435,9 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         truth's pixels near its depth steps, :func:`depth_step_mask`) and
         ``methods``: method -> ``{"runtime_s", "dense": errors, "edges":
         errors or None}`` (errors as :func:`disparity_errors`, split at the
-        depth steps); a peer scored at nfdepth's edge points also
+        depth steps); nfdepth's also has ``"filled"``: its dense map with
+        the holes filled from the background (:meth:`StereoResult.filled`,
+        every pixel of a line with a value); a peer scored at nfdepth's edge points also
         has ``"nfdepth_at_shared_edges"``: nfdepth's errors at those of its
         edge points where the peer has a value (the same points as the peer's
         ``"edges"`` figures).
@@ -485,6 +487,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
             "runtime_s": float(res.runtime_s),
             "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step, near_steps=steps),
             "dense": disparity_errors(d, truth, truth_step_px=step, near_steps=steps),
+            # the dense map with its holes filled from the background (StereoResult.filled)
+            "filled": disparity_errors(res.filled()[0], truth, truth_step_px=step, near_steps=steps),
         }
         maps["nfdepth"] = d
     for m in methods:
@@ -625,11 +629,11 @@ def evaluation_rows(result):
     """
     methods = result["methods"]
     for method, entry in methods.items():
-        for part in ("edges", "dense"):
+        for part in ("edges", "dense", "filled"):
             errs = entry.get(part)
             if errs is None:
                 continue
-            label = "edges" if method == "nfdepth" and part == "edges" else ("at nfdepth edges" if part == "edges" else "dense")
+            label = {"edges": "edges" if method == "nfdepth" else "at nfdepth edges", "dense": "dense", "filled": "dense, filled"}[part]
             yield method, label, errs, entry["runtime_s"]
             shared = entry.get("nfdepth_at_shared_edges") if part == "edges" else None
             if shared is not None and shared["points"] < methods["nfdepth"]["edges"]["points"]:
