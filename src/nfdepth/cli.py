@@ -382,6 +382,11 @@ def _cmd_stereo(args) -> int:
         options["levels"] = args.levels
     if args.threads is not None:
         options["threads"] = args.threads
+    if args.disparity_range is not None:
+        lo, hi = args.disparity_range
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise CLIError(f"--disparity-range must be two finite numbers MIN < MAX, got {lo:g} {hi:g}")
+        options["disparity_range_px"] = (lo, hi)
     if column:
         from .xy_stereo import static_stereo_xy
 
@@ -437,6 +442,8 @@ def _cmd_stereo(args) -> int:
     notes = ""
     if filled is not None:
         notes += f", {int(np.count_nonzero(filled & valid))} filled"
+    if result.search_range_px is not None:
+        notes += f", searched {result.search_range_px[0]:g}..{result.search_range_px[1]:g} px"
     if column:
         both = int(np.count_nonzero(valid & (result.axis_count == 2)))
         notes += f", row and column fused ({both} pixels from both)"
@@ -531,6 +538,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (px or scene units); with --uncertainty also PNG_std.png")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
     p.add_argument("--levels", type=int, help="pyramid levels (default: from the image size)")
+    p.add_argument(
+        "--disparity-range",
+        nargs=2,
+        type=float,
+        metavar=("MIN", "MAX"),
+        help="disparities to search, px between neighbouring views (as StereoSGBM's range; default: found coarse to fine); skips the pyramid",
+    )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions (docs/rig-format.md)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")

@@ -70,6 +70,31 @@ measurement in a coarse-to-fine warping scheme:
    which are therefore off by default (``propagate_rounds=0``,
    ``polish_iterations=0``): the differential polish adds a 0.5-1 px ripple
    on real data.
+3d. The cost volume's search range. By default it is the 0.5-99.5 % range
+   of the coarse-to-fine field, +-2 px. That field can miss a part of the
+   scene that moves much more than the rest: a differential update moves
+   at most 1 px per iteration and level, and an object whose disparity is
+   several coarse pixels away from its surroundings' never gets there (on
+   textured planes, 240 x 320 px: a foreground at 40 px in front of a
+   background at 8 px came out 24 % valid and every value wrong; a whole
+   scene at 30 px per step in 120 x 160 px images, 0.1 % valid, all wrong).
+   When more than 5 % of the textured pixels (column gradient above 3
+   noise stds) have no unique match (cost margin below
+   ``min_cost_margin``), the coarsest level of :func:`auto_levels` (24-47
+   px on its shorter side) is searched exhaustively, over every disparity
+   that keeps the outer views within half its width
+   (:func:`_widen_by_coarse_search`). Where the robust extremes (2nd / 98th
+   percentiles) of that search's unique, textured winners lie beyond the
+   range by more than the search's resolution, the cost volume is run again
+   over the widened range, and that result is kept if fewer textured
+   pixels are ambiguous in it (a periodic texture, whose aliases the wider
+   range lets in, keeps the first). On the seven real scenes (three and
+   all views) the search agrees with the field, so every output is
+   unchanged. With ``levels=1`` (the paper's single-level method) there is
+   no search. ``disparity_range_px`` gives the range instead (as SGBM's
+   ``numDisparities`` does) and skips the pyramid. When more than 75 % of
+   the textured pixels have no unique match in the end, the range has
+   missed the scene, and a warning says so.
 4. At the finest level, before the final measurement, a smooth intensity
    offset of every warped view against the reference is estimated and
    removed (:func:`_photometric_offsets`, ``photometric_window_px``). Real
@@ -184,6 +209,7 @@ normalised-convolution variance.
 from __future__ import annotations
 
 import functools
+import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -206,6 +232,22 @@ __all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background"]
 # step: 0.022 / 0.053 / 0.100 px for steps of 0.25 / 0.5 / 1 px (max 0.04 /
 # 0.09 / 0.14 px).
 _SUBSAMPLE_BIAS_STEPS = 0.1
+# Search of the coarsest pyramid level (module docstring, step 3d): views
+# may shift by up to this fraction of the image width; window radius (px of
+# that level); the robust extremes (percentiles) of its confident winners.
+_SEARCH_REACH = 0.5
+_SEARCH_RADIUS = 2
+_SEARCH_PERCENTILE = 2.0
+_SEARCH_MIN_PIXELS = 16
+# Share of the textured pixels without a unique match above which the
+# coarse-to-fine range is checked by the coarse search (step 3d), and above
+# which the search range has missed the scene (a warning). The real scenes
+# give 0.01-0.07, a missed foreground 0.1-0.13, a missed scene 0.99-1.
+_RETRY_SHARE = 0.05
+_LOST_MATCH_SHARE = 0.75
+_MAX_CANDIDATES = 512
+# A pixel is textured when its column gradient exceeds this many noise stds.
+_TEXTURE_NOISE_MULTIPLE = 3.0
 _PYRDOWN_NOISE = 70.0 / 256.0  # std gain of cv2.pyrDown on white noise: (sum k_i^2) with k = [1 4 6 4 1]/16, squared, sqrt
 
 
@@ -239,6 +281,9 @@ class StereoResult:
         Image noise std used (grey levels of the input).
     axis : str
         Direction of the baseline, "x" (a row of views) or "y" (a column).
+    search_range_px : (float, float) or None
+        First and last disparity candidate of the cost volume (px per unit
+        position; ``disparity_range_px`` when given), None without it.
     """
 
     disparity: np.ndarray
@@ -249,6 +294,7 @@ class StereoResult:
     runtime_s: float
     noise_std: float = 0.0
     axis: str = "x"
+    search_range_px: tuple[float, float] | None = None
 
     @property
     def valid(self) -> np.ndarray:
@@ -841,6 +887,95 @@ def _active_views(t, ref, level, levels):
     return [k for k in range(len(t)) if k == ref or abs(t[k]) <= span]
 
 
+def _check_disparity_range(value) -> tuple[float, float]:
+    """``disparity_range_px`` as ``(lo, hi)``: two finite numbers, ``lo < hi``."""
+    try:
+        if isinstance(value, (str, bytes)):
+            raise TypeError
+        lo, hi = (float(x) for x in value)
+    except (TypeError, ValueError):
+        msg = f"disparity_range_px must be two numbers (smallest, largest disparity in px), got {value!r}"
+        raise ValueError(msg) from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        msg = f"disparity_range_px must be two finite numbers with the smallest first, got {value!r}"
+        raise ValueError(msg)
+    return lo, hi
+
+
+def _candidates(lo, hi, step_px):
+    """Equally spaced disparity candidates ``lo .. hi`` at ``step_px`` (wider steps beyond ``_MAX_CANDIDATES``), and the step."""
+    step = float(step_px)
+    if (hi - lo) / step > _MAX_CANDIDATES:
+        step = (hi - lo) / _MAX_CANDIDATES
+    return np.arange(lo, hi + 0.5 * step, step, dtype=np.float64), step
+
+
+def _cost_margin(c_best, c_second, spread):
+    """Relative margin of the best cost to the best one more than 1 px away (uniqueness)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (c_second - c_best) / np.maximum(c_best, 1e-6 * spread)
+
+
+def _coarsest(pyramid, n_down):
+    """Level ``n_down`` of a view's pyramid, continuing it with ``cv2.pyrDown`` if it is shorter."""
+    img = pyramid[min(n_down, len(pyramid) - 1)]
+    for _ in range(n_down - (len(pyramid) - 1)):
+        img = cv2.pyrDown(img)
+    return img
+
+
+def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, noise_floor, min_cost_margin, match):
+    """The search range ``lo .. hi``, widened where an exhaustive search of the coarsest level finds the scene beyond it.
+
+    Module docstring, step 3d. The coarsest level of :func:`auto_levels` is
+    searched over every disparity that keeps the outer views within
+    ``_SEARCH_REACH`` of its width (0.5 px steps of that level, guided
+    window of radius ``_SEARCH_RADIUS``). The robust extremes (the
+    ``_SEARCH_PERCENTILE`` percentiles) of the winners at its unique,
+    textured pixels, scaled to the finest level, replace ``lo`` / ``hi``
+    only where they lie beyond them by more than their own resolution (half
+    a coarse pixel, plus the usual 2 px): the range of the coarse-to-fine
+    field stands wherever the search agrees with it.
+    """
+    n_down = auto_levels(pyramids[ref][0].shape) - 1
+    coarse = [_coarsest(p, n_down) for p in pyramids]
+    scale = float(2**n_down)
+    reach = _SEARCH_REACH * coarse[ref].shape[1] / float(np.max(np.abs(t)))
+    candidates = np.arange(-np.ceil(reach), np.ceil(reach) + 0.25, 0.5)
+    feats = _match_features(coarse)
+    guide = (gaussian_smooth(coarse[ref], sigma_px=0.5) - np.float32(guide_offset)) / np.float32(max(spread, 1e-6))
+    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=_SEARCH_RADIUS, **match)
+    textured = np.abs(feats[ref][1]) > _TEXTURE_NOISE_MULTIPLE * noise_floor * _PYRDOWN_NOISE**n_down
+    found = d[textured & (_cost_margin(c_best, c_second, spread) >= min_cost_margin)]
+    if found.size < _SEARCH_MIN_PIXELS:
+        return lo, hi
+    resolution = 0.5 * scale + 2.0
+    lo_s = np.floor(np.percentile(found, _SEARCH_PERCENTILE) * scale - resolution)
+    hi_s = np.ceil(np.percentile(found, 100.0 - _SEARCH_PERCENTILE) * scale + resolution)
+    if hi_s - resolution > hi:
+        hi = hi_s
+    if lo_s + resolution < lo:
+        lo = lo_s
+    return lo, hi
+
+
+def _search(lo, hi, *, feats, t, ref, guide, radius, match, step_px, spread, textured, min_cost_margin):
+    """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share of ambiguous textured pixels)``."""
+    candidates, step = _candidates(lo, hi, step_px)
+    # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
+    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, **match)
+    # uniqueness: the best cost against the best one more than 1 px away
+    margin = _cost_margin(c_best, c_second, spread)
+    return d, margin, candidates, step, _ambiguous_share(margin, textured, min_cost_margin)
+
+
+def _ambiguous_share(margin, textured, min_cost_margin) -> float:
+    """Share of the textured pixels whose cost margin is below ``min_cost_margin`` (0 when there are too few, or no test)."""
+    if min_cost_margin <= 0 or np.count_nonzero(textured) < _SEARCH_MIN_PIXELS:
+        return 0.0
+    return float(np.mean(~(margin[textured] >= min_cost_margin)))
+
+
 def _check_positions(positions, n, reference):
     if positions is None:
         pos = np.arange(n, dtype=np.float64)
@@ -906,6 +1041,7 @@ def static_stereo(
     min_cost_margin: float = 0.05,
     edge_cost_margin: float = 0.1,
     edge_step_px: float = 0.5,
+    disparity_range_px=None,
     threads: int | None = None,
     dtype=np.float32,
 ) -> StereoResult:
@@ -1028,6 +1164,13 @@ def static_stereo(
         ``UNCERTAIN`` (module docstring, step 4; 0: no test).
     polish_radius : int
         Guided-filter radius of the differential polish.
+    disparity_range_px : (float, float), optional
+        Smallest and largest disparity to search (px per unit position, as
+        the output), like StereoSGBM's ``minDisparity`` / ``numDisparities``:
+        the cost volume searches exactly this range at ``cost_step_px`` (at
+        most 512 candidates) and the coarse-to-fine pyramid is skipped
+        (``levels`` is then 1). Default: found automatically (module
+        docstring, step 3d). Needs ``cost_volume=True``.
     threads : int, optional
         Threads of the cost volume (numba path; row strips fixed by the image
         size, so the result does not depend on it). Default OpenCV's
@@ -1108,6 +1251,10 @@ def static_stereo(
     min_cost_margin = check_nonnegative_finite("min_cost_margin", min_cost_margin)
     edge_cost_margin = check_nonnegative_finite("edge_cost_margin", edge_cost_margin)
     edge_step_px = check_nonnegative_finite("edge_step_px", edge_step_px)
+    search_range = None if disparity_range_px is None else _check_disparity_range(disparity_range_px)
+    if search_range is not None and not cost_volume:
+        msg = "disparity_range_px needs cost_volume=True (it is the cost volume's search range)"
+        raise ValueError(msg)
     if threads is None:
         threads = max(1, cv2.getNumThreads())
     else:
@@ -1120,7 +1267,7 @@ def static_stereo(
     elif int(levels) < 1 or (min(shape) >> (int(levels) - 1)) < 4:
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
-    levels = int(levels)
+    levels = 1 if search_range is not None else int(levels)
     noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
     p1, p99 = np.percentile(views[ref], [1, 99])
     spread = float(p99 - p1)
@@ -1151,7 +1298,7 @@ def static_stereo(
         sub_ref = active.index(ref)
         # With the cost volume the finest level's differential field only sets the
         # search range, which the next coarser level gives as well (+-2 px margin).
-        skip = cost_volume and level == 0 and levels > 1
+        skip = cost_volume and level == 0 and (levels > 1 or search_range is not None)
         for _ in range(0 if skip else iterations_per_level):
             m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
@@ -1179,23 +1326,34 @@ def static_stereo(
         if median_px > 1 and not skip:
             d = cv2.medianBlur(d, median_px)
         if cost_volume and level == 0:
-            lo = np.floor(np.percentile(d, 0.5)) - 2.0
-            hi = np.ceil(np.percentile(d, 99.5)) + 2.0
-            step = float(cost_step_px)
-            if (hi - lo) / step > 512:
-                step = (hi - lo) / 512
-            candidates = np.arange(lo, hi + 0.5 * step, step, dtype=np.float64)
+            match = {"eps": cost_eps, "tau_i": cost_tau_i * spread, "tau_g": cost_tau_g * spread, "alpha": cost_alpha, "exclude_px": 1.0, "threads": threads}
+            if search_range is not None:
+                lo, hi = search_range
+            else:
+                lo = np.floor(np.percentile(d, 0.5)) - 2.0
+                hi = np.ceil(np.percentile(d, 99.5)) + 2.0
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
-            # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
-            d, c_best, c_second = best_disparity(
-                feats, t, ref, candidates, guide[0], radius=cost_radius, eps=cost_eps,
-                tau_i=cost_tau_i * spread, tau_g=cost_tau_g * spread, alpha=cost_alpha, exclude_px=1.0, threads=threads,
-            )
+            textured = np.abs(feats[ref][1]) > _TEXTURE_NOISE_MULTIPLE * noise_floor
+            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": cost_step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
+            d, margin, candidates, step, share = _search(lo, hi, **volume)
+            if search_range is None and levels > 1 and share > _RETRY_SHARE:
+                # step 3d: has the coarse-to-fine range missed a part of the scene?
+                wide = _widen_by_coarse_search(lo, hi, pyramids, t, ref, guide_offset=p1, spread=spread, noise_floor=noise_floor, min_cost_margin=min_cost_margin, match=match)
+                if wide != (lo, hi):
+                    retry = _search(*wide, **volume)
+                    if retry[-1] < share:
+                        d, margin, candidates, step, share = retry
+            del volume
             del feats, src
-            # uniqueness: the best cost against the best one more than 1 px away
-            with np.errstate(invalid="ignore", divide="ignore"):
-                margin = (c_second - c_best) / np.maximum(c_best, 1e-6 * spread)
+            if share > _LOST_MATCH_SHARE:
+                warnings.warn(
+                    f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities "
+                    f"{candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN): the scene may lie outside that range "
+                    "(give disparity_range_px / --disparity-range), or the views are not rectified along the baseline",
+                    UserWarning,
+                    stacklevel=2,
+                )
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
@@ -1338,4 +1496,5 @@ def static_stereo(
         runtime_s=time.perf_counter() - start,
         noise_std=noise,
         axis=axis,
+        search_range_px=(float(candidates[0]), float(candidates[-1])) if cost_volume else None,
     )

@@ -68,13 +68,21 @@ class XYStereoResult(StereoResult):
     reference image's orientation), ``axis_count`` the number of axes that
     measured each pixel (0, 1 or 2) and ``conflict`` the pixels where both
     did and disagreed (``Reason.UNCERTAIN``). ``runtime_s`` covers both
-    axes and the fusion; ``noise_std`` is the row's.
+    axes and the fusion; ``noise_std`` is the row's; ``search_range_px``
+    spans both axes' search ranges.
     """
 
     row: StereoResult | None = None
     column: StereoResult | None = None
     axis_count: np.ndarray | None = None
     conflict: np.ndarray | None = None
+
+
+def _union_range(a, b):
+    """The smallest range holding the search ranges ``a`` and ``b`` (None where an axis has none)."""
+    if a is None or b is None:
+        return None
+    return (min(a[0], b[0]), max(a[1], b[1]))
 
 
 def _merged_reason(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -217,6 +225,7 @@ def static_stereo_xy(
         levels=row.levels,
         runtime_s=time.perf_counter() - start,
         noise_std=row.noise_std,
+        search_range_px=_union_range(row.search_range_px, column.search_range_px),
         row=row,
         column=column,
         axis_count=count,
