@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.special import erf
 
-from nfdepth.edges import _block_read_back, block_structure_tensor, corner_ratio, laplacian_zero_crossings, select_edge_points
+from nfdepth.edges import _block_read_back, block_structure_tensor, corner_ratio, laplacian_zero_crossings, rounding_gradient_floor, select_edge_points
 from nfdepth.normal_flow import gaussian_smooth, normal_flow
 
 
@@ -147,3 +147,23 @@ def test_corner_ratio_reads_the_block_tensor_back_bilinearly():
         rows = wr0[:, None] * tensor[:, r0, :] + wr1[:, None] * tensor[:, r1, :]
         expected = wc0 * rows[:, :, c0] + wc1 * rows[:, :, c1]
         np.testing.assert_allclose(_read_back(tensor, (h, w)), expected, rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("shape", [(50, 60), (37, 91)])
+def test_a_flat_image_has_no_edge_points(shape):
+    """Smoothing a constant 7 leaves float32 ripples (|grad I| up to 4e-7 here); a threshold
+    relative to the image's own gradients accepted 32 of them as edge points."""
+    frames = [np.full(shape, 7.0, np.float32)] * 3
+    g = normal_flow(frames, sigma_px=2.0)
+    sel = select_edge_points(g, gaussian_smooth(frames[1], sigma_px=2.0))
+    assert not sel.strong.any() and not sel.mask.any()
+
+
+def test_the_rounding_floor_keeps_faint_real_edges():
+    """A step of 0.01 grey levels on an intensity of 200 (5e-5 of it) is still an edge."""
+    img = np.full((40, 40), 200.0, np.float32)
+    img[:, 20:] += 0.01
+    g = normal_flow([img] * 3, sigma_px=1.0)
+    sel = select_edge_points(g, gaussian_smooth(img, sigma_px=1.0))
+    assert sel.mask[:, 19].sum() >= 30
+    assert rounding_gradient_floor(gaussian_smooth(img, sigma_px=1.0)) == pytest.approx(2.0001e-4, rel=1e-4)

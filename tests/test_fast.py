@@ -276,3 +276,13 @@ def test_tiny_images_and_window_larger_than_image():
         fr = [np.arange(shape[0] * shape[1], dtype=np.float32).reshape(shape) * (t + 1) for t in range(3)]
         out = normal_flow_edges(fr, sigma_px=0.8, border_px=0)
         assert out.vn.shape == (shape[0] - 1, shape[1] - 1)
+
+
+@pytest.mark.parametrize("shape", [(50, 60), (37, 91)])
+def test_a_flat_image_has_no_edge_points(shape):
+    """The fast path applies the reference's float32-rounding floor (nfdepth.edges.ROUNDING_GRADIENT)."""
+    frames = [np.full(shape, 7.0, np.float32)] * 3
+    assert not fast.normal_flow_edges(frames, sigma_px=2.0).mask.any()
+    stream = fast.StreamingNormalFlow(sigma_px=2.0)
+    results = [stream.push(f) for f in frames]
+    assert not results[-1].mask.any()

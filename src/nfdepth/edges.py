@@ -9,7 +9,9 @@ gradients of :mod:`nfdepth.normal_flow`:
 * a cell is a zero crossing when the Laplacian at its four corner pixels
   changes sign;
 * a cell is *strong* when ``|grad I| >= min_gradient`` (intensity per pixel;
-  by default a fraction of a high percentile of the image's gradient);
+  by default a fraction of a high percentile of the image's gradient) and
+  above float32 rounding, ``ROUNDING_GRADIENT`` times the largest smoothed
+  intensity (:func:`rounding_gradient_floor`);
 * a cell is a *corner* when the eigenvalue ratio ``lambda_2 / lambda_1`` of
   the structure tensor (gradient outer products averaged with a Gaussian
   window, built on the 2 x 2 block grid and read back bilinearly) exceeds
@@ -28,6 +30,18 @@ import numpy as np
 
 from ._validate import check_fraction, check_int, check_nonnegative_finite, check_positive_finite
 from .normal_flow import GradientField
+
+#: Gradients below this fraction of the largest smoothed intensity are float32
+#: rounding, not edges. Smoothing a flat image leaves ripples of a few 1e-8 of
+#: its value (a constant 7, 50 x 60 px: |grad I| = 2e-7 at 46 cells), and a
+#: threshold relative to the image's own gradients would accept them.
+ROUNDING_GRADIENT = 1e-6
+
+
+def rounding_gradient_floor(smoothed_middle: np.ndarray) -> float:
+    """Largest gradient magnitude that is float32 rounding of ``smoothed_middle``'s intensities (``ROUNDING_GRADIENT`` times its largest ``|value|``)."""
+    a = np.asarray(smoothed_middle)
+    return ROUNDING_GRADIENT * float(np.max(np.abs(a))) if a.size else 0.0
 
 __all__ = [
     "EdgeSelection",
@@ -227,7 +241,7 @@ def select_edge_points(
     else:
         min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
     zero = laplacian_zero_crossings(smoothed_middle)
-    strong = (mag >= min_gradient) & (mag > 0)
+    strong = (mag >= min_gradient) & (mag > rounding_gradient_floor(smoothed_middle))
     ratio = corner_ratio(field.grad_col, field.grad_row, window_sigma_px=corner_window_px)
     corner = ~(ratio <= max_corner_ratio)
     inside = np.zeros_like(zero)
