@@ -82,7 +82,8 @@ measurement in a coarse-to-fine warping scheme:
    noise stds) have no unique match (cost margin below
    ``min_cost_margin``), the coarsest level of :func:`auto_levels` (24-47
    px on its shorter side) is searched exhaustively, over every disparity
-   that keeps the outer views within half its width
+   from -1 px of that level to the one that keeps the outer views within
+   half its width
    (:func:`_widen_by_coarse_search`). Where the robust extremes (2nd / 98th
    percentiles) of that search's unique, textured winners lie beyond the
    range by more than the search's resolution, the cost volume is run again
@@ -928,8 +929,9 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, n
     """The search range ``lo .. hi``, widened where an exhaustive search of the coarsest level finds the scene beyond it.
 
     Module docstring, step 3d. The coarsest level of :func:`auto_levels` is
-    searched over every disparity that keeps the outer views within
-    ``_SEARCH_REACH`` of its width (0.5 px steps of that level, guided
+    searched over every disparity from -1 px (of that level) up to the one
+    that keeps the outer views within ``_SEARCH_REACH`` of its width (0.5
+    px steps of that level, guided
     window of radius ``_SEARCH_RADIUS``). The robust extremes (the
     ``_SEARCH_PERCENTILE`` percentiles) of the winners at its unique,
     textured pixels, scaled to the finest level, replace ``lo`` / ``hi``
@@ -941,7 +943,7 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, n
     coarse = [_coarsest(p, n_down) for p in pyramids]
     scale = float(2**n_down)
     reach = _SEARCH_REACH * coarse[ref].shape[1] / float(np.max(np.abs(t)))
-    candidates = np.arange(-np.ceil(reach), np.ceil(reach) + 0.25, 0.5)
+    candidates = np.arange(-1.0, np.ceil(reach) + 0.25, 0.5)  # a scene in front of the cameras, and noise about 0
     feats = _match_features(coarse)
     guide = (gaussian_smooth(coarse[ref], sigma_px=0.5) - np.float32(guide_offset)) / np.float32(max(spread, 1e-6))
     d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=_SEARCH_RADIUS, **match)
