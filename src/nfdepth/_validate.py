@@ -131,6 +131,17 @@ def check_int(name: str, value, minimum: int) -> int:
     return int(value)
 
 
+def check_view_index(name: str, value, count: int) -> int:
+    """Return ``value`` as int, or raise if it is not the index of one of ``count`` views (bools refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        msg = f"{name} must be an int view index, got {value!r}"
+        raise TypeError(msg)
+    if not 0 <= int(value) < count:
+        msg = f"{name} must be a view index in 0..{count - 1}, got {value!r}"
+        raise ValueError(msg)
+    return int(value)
+
+
 def check_fraction(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a number within [0, 1]."""
     return _check_number(name, value, "a number within [0, 1]", lambda x: 0 <= x <= 1, refused="within [0, 1]")

@@ -219,7 +219,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
-from ._validate import as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, float_dtype
+from ._validate import as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -917,6 +917,16 @@ def _cost_margin(c_best, c_second, spread):
         return (c_second - c_best) / np.maximum(c_best, 1e-6 * spread)
 
 
+def _guide(image, offset, spread):
+    """Guide image of the cost aggregation: ``image`` lightly smoothed, normalised by the reference's 1-99 % range."""
+    return (gaussian_smooth(image, sigma_px=0.5) - np.float32(offset)) / np.float32(max(spread, 1e-6))
+
+
+def _textured(features, noise):
+    """Pixels whose column gradient (of ``_match_features``) exceeds ``_TEXTURE_NOISE_MULTIPLE`` noise stds."""
+    return np.abs(features[1]) > _TEXTURE_NOISE_MULTIPLE * noise
+
+
 def _coarsest(pyramid, n_down):
     """Level ``n_down`` of a view's pyramid, continuing it with ``cv2.pyrDown`` if it is shorter."""
     img = pyramid[min(n_down, len(pyramid) - 1)]
@@ -945,9 +955,8 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, n
     reach = _SEARCH_REACH * coarse[ref].shape[1] / float(np.max(np.abs(t)))
     candidates = np.arange(-1.0, np.ceil(reach) + 0.25, 0.5)  # a scene in front of the cameras, and noise about 0
     feats = _match_features(coarse)
-    guide = (gaussian_smooth(coarse[ref], sigma_px=0.5) - np.float32(guide_offset)) / np.float32(max(spread, 1e-6))
-    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=_SEARCH_RADIUS, **match)
-    textured = np.abs(feats[ref][1]) > _TEXTURE_NOISE_MULTIPLE * noise_floor * _PYRDOWN_NOISE**n_down
+    d, c_best, c_second = best_disparity(feats, t, ref, candidates, _guide(coarse[ref], guide_offset, spread), radius=_SEARCH_RADIUS, **match)
+    textured = _textured(feats[ref], noise_floor * _PYRDOWN_NOISE**n_down)
     found = d[textured & (_cost_margin(c_best, c_second, spread) >= min_cost_margin)]
     if found.size < _SEARCH_MIN_PIXELS:
         return lo, hi
@@ -1203,13 +1212,7 @@ def static_stereo(
         msg = f"views must be at least {_MIN_SIZE_PX}x{_MIN_SIZE_PX} pixels (the gradient stencils need 3 px), got shape {views[0].shape}"
         raise ValueError(msg)
     n = len(views)
-    if isinstance(reference, bool) or not isinstance(reference, (int, np.integer)):
-        msg = f"reference must be an int view index, got {reference!r}"
-        raise TypeError(msg)
-    if not 0 <= int(reference) < n:
-        msg = f"reference must be a view index in 0..{n - 1}, got {reference!r}"
-        raise ValueError(msg)
-    ref = int(reference)
+    ref = check_view_index("reference", reference, n)
     t = _check_positions(positions, n, ref)
     sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
     if min_gradient is not None:
@@ -1285,7 +1288,7 @@ def static_stereo(
     d = np.zeros(pyramids[0][-1].shape, np.float32)
     var = np.full(d.shape, np.inf, np.float32)
     guided_radius = max(1, int(round(guided_scale * dense_window_px)))
-    guide = [(gaussian_smooth(lv, sigma_px=0.5) - np.float32(p1)) / np.float32(max(spread, 1e-6)) for lv in pyramids[ref]]
+    guide = [_guide(lv, p1, spread) for lv in pyramids[ref]]
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
         reference_nodes = _ReferenceNodes.of(smoothed[ref])
@@ -1336,7 +1339,7 @@ def static_stereo(
                 hi = np.ceil(np.percentile(d, 99.5)) + 2.0
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
-            textured = np.abs(feats[ref][1]) > _TEXTURE_NOISE_MULTIPLE * noise_floor
+            textured = _textured(feats[ref], noise_floor)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": cost_step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             d, margin, candidates, step, share = _search(lo, hi, **volume)
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
@@ -1346,8 +1349,7 @@ def static_stereo(
                     retry = _search(*wide, **volume)
                     if retry[-1] < share:
                         d, margin, candidates, step, share = retry
-            del volume
-            del feats, src
+            del volume, feats, src
             if share > _LOST_MATCH_SHARE:
                 warnings.warn(
                     f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities "

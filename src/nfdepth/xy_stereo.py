@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_frames, check_positive_or_inf
+from ._validate import as_frames, check_positive_or_inf, check_view_index
 from .depth import Reason
 from .stereo import StereoResult, static_stereo
 
@@ -188,14 +188,9 @@ def static_stereo_xy(
     limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
     rows = as_frames("row_views", row_views, min_count=2, dtype=np.float32)
     cols = as_frames("column_views", column_views, min_count=2, dtype=np.float32)
-    for name, ref, seq in (("row_reference", row_reference, rows), ("column_reference", column_reference, cols)):
-        if isinstance(ref, bool) or not isinstance(ref, (int, np.integer)):
-            msg = f"{name} must be an int view index, got {ref!r}"
-            raise TypeError(msg)
-        if not 0 <= int(ref) < len(seq):
-            msg = f"{name} must be a view index in 0..{len(seq) - 1}, got {ref!r}"
-            raise ValueError(msg)
-    ref_x, ref_y = rows[int(row_reference)], cols[int(column_reference)]
+    row_reference = check_view_index("row_reference", row_reference, len(rows))
+    column_reference = check_view_index("column_reference", column_reference, len(cols))
+    ref_x, ref_y = rows[row_reference], cols[column_reference]
     if ref_x.shape != ref_y.shape:
         msg = f"the row's and the column's views must have one size, got {ref_x.shape} and {ref_y.shape}"
         raise ValueError(msg)
@@ -208,7 +203,7 @@ def static_stereo_xy(
     results = {}
     for axis, views, ref, positions in (("x", rows, row_reference, row_positions), ("y", cols, column_reference, column_positions)):
         try:
-            results[axis] = static_stereo(views, reference=int(ref), positions=positions, axis=axis, **options)
+            results[axis] = static_stereo(views, reference=ref, positions=positions, axis=axis, **options)
         except (TypeError, ValueError) as exc:
             if type(exc) not in (TypeError, ValueError):
                 raise
