@@ -164,7 +164,9 @@ def test_left_right_mirror_with_the_matching_motion(data):
     a = nf.solve_inverse_depth(vn, camera=camera, rows=rows, cols=cols, alpha=alpha, relative_motion=motion)
     b = nf.solve_inverse_depth(vn, camera=camera, rows=rows, cols=mirrored_cols, alpha=mirrored_alpha, relative_motion=_mirror(motion))
     assert np.array_equal(a.reason, b.reason)
-    np.testing.assert_allclose(b.rho[b.valid], a.rho[a.valid], rtol=1e-9)
+    # float64 rounding in another order, amplified by eq. 4's conditioning: wide-angle
+    # draws (focal 20 px, 2060 px wide) reach 1.0017e-9 relative; 1e-8 leaves 10x room
+    np.testing.assert_allclose(b.rho[b.valid], a.rho[a.valid], rtol=1e-8)
 
 
 @settings(max_examples=15, deadline=None)
