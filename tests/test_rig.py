@@ -64,7 +64,7 @@ def test_paper_example_rig():
     np.testing.assert_array_equal(rig.relative_motion().translation, [-2.0, 0.0, 0.0])
     np.testing.assert_array_equal(rig.relative_motion().rotation, [0.0, 0.0, 0.0])
     assert rig.frame_interval == 1.0
-    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 2.0, "axis": "x", "positions": None, "column_positions": None}
+    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 2.0, "axis": "x", "positions": None, "column_positions": None, "disparity_range_px": None}
     # the example matches the renderer's paper scene
     scene = synthetic.paper_dynamic_sequence(1)
     np.testing.assert_allclose(rig.relative_motion().translation, scene.relative_motion.translation)
@@ -102,13 +102,21 @@ def test_round_trip_all_sections(tmp_path):
     d["video"] = {"positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.25, 0.0, 0.0]]}
     rig = rig_from_dict(d)
     np.testing.assert_array_equal(rig.stereo.direction, [0.0, 1.0, 0.0])
-    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 0.5, "axis": "y", "positions": [0.0, 1.0, 2.5], "column_positions": None}
+    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 0.5, "axis": "y", "positions": [0.0, 1.0, 2.5], "column_positions": None, "disparity_range_px": None}
     assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
     # a row along x with a column through its reference (x and y baselines)
     cross = copy.deepcopy(d)
     cross["stereo"] = {"baseline": 0.5, "axis": "x", "column_positions": [-1.0, 0.0, 2.0]}
     rig = rig_from_dict(cross)
     assert stereo_options_from_rig(rig)["column_positions"] == [-1.0, 0.0, 2.0]
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+    assert rig != rig_from_dict(d)
+    # a disparity range to search, as nfdepth stereo --disparity-range
+    ranged = copy.deepcopy(d)
+    ranged["stereo"]["disparity_range_px"] = [2, 40.5]
+    rig = rig_from_dict(ranged)
+    assert rig.stereo.disparity_range_px == (2.0, 40.5)
+    assert stereo_options_from_rig(rig)["disparity_range_px"] == [2.0, 40.5]
     assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
     assert rig != rig_from_dict(d)
     (tmp_path / "p.csv").write_text("frame,x,y,z\n0,0,0,0\n1,0.5,0,0\n2,1.0,0,0\n")
@@ -164,6 +172,11 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["stereo"].update(column_positions=[1, 0]), r"stereo\.column_positions = \[1, 0\]: expected strictly increasing"),
         (lambda d: d["stereo"].update(column_positions="0 1"), r"stereo\.column_positions = '0 1': expected a list of 2 or more"),
         (lambda d: d["stereo"].update(axis="y", column_positions=[0, 1]), r"stereo\.column_positions = \[0, 1\]: expected a row along x"),
+        (lambda d: d["stereo"].update(disparity_range_px=[40, 2]), r"stereo\.disparity_range_px = \[40, 2\]: expected \[smallest, largest\] disparity .* smallest first"),
+        (lambda d: d["stereo"].update(disparity_range_px=[5, 5]), r"stereo\.disparity_range_px = \[5, 5\]: expected \[smallest, largest\]"),
+        (lambda d: d["stereo"].update(disparity_range_px=[0, float("inf")]), r"stereo\.disparity_range_px = \[0, inf\]: expected .*two finite numbers"),
+        (lambda d: d["stereo"].update(disparity_range_px=[0, 8, 16]), r"stereo\.disparity_range_px = \[0, 8, 16\]: expected"),
+        (lambda d: d["stereo"].update(disparity_range_px=64), r"stereo\.disparity_range_px = 64: expected"),
         (lambda d: d["video"].update(positions=[[0, 0, 0]] * 3), r"video: velocity and positions contradict each other"),
         (lambda d: d["video"].update(poses="p.csv"), r"video: velocity and poses contradict each other"),
         (lambda d: d["video"].pop("velocity"), r"video: expected one of velocity, positions, poses"),

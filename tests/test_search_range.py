@@ -193,6 +193,49 @@ def test_cli_disparity_range(plane_files, tmp_path, capsys):
     np.testing.assert_array_equal(read_pfm(out), lib.disparity)
 
 
+def _rig_file(tmp_path, stereo_lines):
+    path = tmp_path / "rig.toml"
+    path.write_text("[camera]\nfocal_px = 100\nwidth_px = 80\nheight_px = 60\n[stereo]\nbaseline = 0.1\n" + stereo_lines)
+    return str(path)
+
+
+def test_rig_disparity_range(plane_files, tmp_path, capsys):
+    """A rig's ``[stereo] disparity_range_px`` is ``--disparity-range``; the same range given
+    twice agrees, a different one is a one-line error."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_pfm
+
+    rig = _rig_file(tmp_path, "disparity_range_px = [0, 40]\n")
+    outputs = []
+    given = ["--disparity-range", "0", "40", "--focal-px", "100", "--baseline", "0.1"]  # what the rig says
+    for k, extra in enumerate((["--rig", rig], given, ["--rig", rig, "--disparity-range", "0", "40"])):
+        outputs.append(tmp_path / f"d{k}.pfm")
+        code = main(["stereo", *plane_files, *extra, "--out", str(outputs[-1])])
+        printed, err = capsys.readouterr()
+        assert code == 0, err
+        assert "searched 0..40 px" in printed
+    first = read_pfm(outputs[0])
+    # depth 100 px * 0.1 / 30 px; 30 px per step is beyond the automatic search (see above)
+    assert np.median(np.abs(first[5:-5, 35:-5] / (10.0 / 30.0) - 1.0)) < 1e-3
+    for other in outputs[1:]:
+        np.testing.assert_array_equal(read_pfm(other), first)
+    out = tmp_path / "d.pfm"
+    code = main(["stereo", *plane_files, "--rig", rig, "--disparity-range", "0", "32", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and not out.exists()
+    assert err.strip() == "nfdepth: error: --disparity-range 0 32 contradicts the rig file's disparity_range_px = [0, 40]"
+
+
+def test_rig_bad_disparity_range(plane_files, tmp_path, capsys):
+    from nfdepth.cli import main
+
+    out = tmp_path / "d.pfm"
+    code = main(["stereo", *plane_files, "--rig", _rig_file(tmp_path, "disparity_range_px = [40, 0]\n"), "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and not out.exists()
+    assert len(err.strip().splitlines()) == 1 and "stereo.disparity_range_px = [40, 0]: expected [smallest, largest]" in err
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [

@@ -322,6 +322,13 @@ def _cmd_stereo(args) -> int:
                 raise CLIError(f"--{key.replace('_', '-')} {given} contradicts the rig file's {key} = {opts[key]}")
             if given is None and opts.get(key) is not None:
                 setattr(args, key, opts[key])
+        rig_range = opts.get("disparity_range_px")
+        if rig_range is not None:
+            if args.disparity_range is not None and list(args.disparity_range) != rig_range:
+                given = " ".join(f"{v:g}" for v in args.disparity_range)
+                in_rig = ", ".join(f"{v:g}" for v in rig_range)
+                raise CLIError(f"--disparity-range {given} contradicts the rig file's disparity_range_px = [{in_rig}]")
+            args.disparity_range = rig_range
     focal = _positive("--focal-px", args.focal_px)
     baseline = _positive("--baseline", args.baseline)
     if (focal is None) != (baseline is None):
@@ -546,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="disparities to search, px between neighbouring views (as StereoSGBM's range; default: found coarse to fine); skips the pyramid",
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
-    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions (docs/rig-format.md)")
+    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions, disparity range (docs/rig-format.md)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
 

@@ -306,6 +306,10 @@ class StereoSpec:
     column_positions : tuple of float or None
         Positions of a column of views through the same reference camera
         (``nfdepth stereo --column``), in the same unit.
+    disparity_range_px : tuple of (float, float) or None
+        Smallest and largest disparity to search, in px per unit position
+        (``disparity_range_px`` of :func:`nfdepth.stereo.static_stereo`,
+        ``nfdepth stereo --disparity-range``).
     """
 
     baseline: float
@@ -313,6 +317,7 @@ class StereoSpec:
     axis: str | None = None
     positions: tuple | None = None
     column_positions: tuple | None = None
+    disparity_range_px: tuple | None = None
 
     def __eq__(self, other) -> bool:
         return (
@@ -322,6 +327,7 @@ class StereoSpec:
             and self.axis == other.axis
             and self.positions == other.positions
             and self.column_positions == other.column_positions
+            and self.disparity_range_px == other.disparity_range_px
         )
 
 
@@ -491,7 +497,7 @@ def check_crossings(crossings) -> tuple:
 
 
 def _parse_stereo(table) -> StereoSpec:
-    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions"))
+    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions", "disparity_range_px"))
     baseline = _number(t, "stereo", "baseline", positive=True)
     which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
     axis = None
@@ -509,7 +515,14 @@ def _parse_stereo(table) -> StereoSpec:
     column_positions = _stereo_positions(t, "column_positions")
     if column_positions is not None and not np.allclose(direction, _AXES["x"], atol=1e-9):
         raise _fail("stereo.column_positions", t["column_positions"], 'a row along x (axis = "x"): the column is the vertical line through its reference')
-    return StereoSpec(baseline, direction, axis, positions, column_positions)
+    disparity_range = None
+    if "disparity_range_px" in t:
+        r = t["disparity_range_px"]
+        ok = isinstance(r, list) and len(r) == 2 and all(_is_number(v) and math.isfinite(v) for v in r)
+        if not ok or not r[0] < r[1]:
+            raise _fail("stereo.disparity_range_px", r, "[smallest, largest] disparity in px per unit position, two finite numbers, smallest first")
+        disparity_range = (float(r[0]), float(r[1]))
+    return StereoSpec(baseline, direction, axis, positions, column_positions, disparity_range)
 
 
 def _stereo_positions(t: dict, key: str):
@@ -643,6 +656,8 @@ def rig_to_toml(rig: Rig) -> str:
             lines.append(f"positions = {_toml_value(s.positions)}")
         if s.column_positions is not None:
             lines.append(f"column_positions = {_toml_value(s.column_positions)}")
+        if s.disparity_range_px is not None:
+            lines.append(f"disparity_range_px = {_toml_value(s.disparity_range_px)}")
     if rig.video is not None:
         v = rig.video
         lines += ["", "[video]"]
@@ -663,7 +678,7 @@ def stereo_options_from_rig(rig: Rig) -> dict:
     """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
 
     Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
-    column_positions=list|None)``.
+    column_positions=list|None, disparity_range_px=list|None)``.
     :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
     a ``direction`` must be one of those.
     """
@@ -683,6 +698,7 @@ def stereo_options_from_rig(rig: Rig) -> dict:
         "axis": axis,
         "positions": list(s.positions) if s.positions is not None else None,
         "column_positions": list(s.column_positions) if s.column_positions is not None else None,
+        "disparity_range_px": list(s.disparity_range_px) if s.disparity_range_px is not None else None,
     }
 
 
