@@ -95,7 +95,10 @@ measurement in a coarse-to-fine warping scheme:
    no search. ``disparity_range_px`` gives the range instead (as SGBM's
    ``numDisparities`` does) and skips the pyramid. When more than 75 % of
    the textured pixels have no unique match in the end, the range has
-   missed the scene, and a warning says so.
+   missed the scene, and a warning says so; when the coarse search of the
+   views in reverse order matches most textured pixels uniquely, the
+   warning says the views are in the wrong order instead (a motion too
+   large for the pyramid to find its negative disparities).
 4. At the finest level, before the final measurement, a smooth intensity
    offset of every warped view against the reference is estimated and
    removed (:func:`_photometric_offsets`, ``photometric_window_px``). Real
@@ -246,6 +249,12 @@ _SEARCH_MIN_PIXELS = 16
 # give 0.01-0.07, a missed foreground 0.1-0.13, a missed scene 0.99-1.
 _RETRY_SHARE = 0.05
 _LOST_MATCH_SHARE = 0.75
+# Share of the textured pixels of the coarse search that the reversed view
+# order must match uniquely to call the order wrong. Measured on textured
+# scenes beyond the pyramid's reach: reversed 0.93-1.00; the order as given
+# of those scenes, of scenes beyond the search's reach, of views moving
+# across the baseline and of unrelated images 0.07-0.23.
+_REVERSED_UNIQUE_SHARE = 0.5
 _MAX_CANDIDATES = 512
 # A pixel is textured when its column gradient exceeds this many noise stds.
 _TEXTURE_NOISE_MULTIPLE = 3.0
@@ -935,29 +944,40 @@ def _coarsest(pyramid, n_down):
     return img
 
 
-def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, noise_floor, min_cost_margin, match):
-    """The search range ``lo .. hi``, widened where an exhaustive search of the coarsest level finds the scene beyond it.
+def _coarse_search(pyramids, t, ref, *, guide_offset, spread, noise_floor, min_cost_margin, match):
+    """Exhaustive search of the coarsest level of :func:`auto_levels` (module docstring, step 3d).
 
-    Module docstring, step 3d. The coarsest level of :func:`auto_levels` is
-    searched over every disparity from -1 px (of that level) up to the one
-    that keeps the outer views within ``_SEARCH_REACH`` of its width (0.5
-    px steps of that level, guided
-    window of radius ``_SEARCH_RADIUS``). The robust extremes (the
-    ``_SEARCH_PERCENTILE`` percentiles) of the winners at its unique,
-    textured pixels, scaled to the finest level, replace ``lo`` / ``hi``
-    only where they lie beyond them by more than their own resolution (half
-    a coarse pixel, plus the usual 2 px): the range of the coarse-to-fine
-    field stands wherever the search agrees with it.
+    Every disparity from -1 px of that level up to the one that keeps the
+    outer views within ``_SEARCH_REACH`` of its width, in 0.5 px steps of
+    that level, guided window of radius ``_SEARCH_RADIUS``. Returns
+    ``(winners, unique_share, scale)``: the winners (coarse px) at its
+    unique, textured pixels, their share of the textured pixels (0 with
+    fewer than ``_SEARCH_MIN_PIXELS`` of those), and the level's scale.
     """
     n_down = auto_levels(pyramids[ref][0].shape) - 1
     coarse = [_coarsest(p, n_down) for p in pyramids]
-    scale = float(2**n_down)
     reach = _SEARCH_REACH * coarse[ref].shape[1] / float(np.max(np.abs(t)))
     candidates = np.arange(-1.0, np.ceil(reach) + 0.25, 0.5)  # a scene in front of the cameras, and noise about 0
     feats = _match_features(coarse)
     d, c_best, c_second = best_disparity(feats, t, ref, candidates, _guide(coarse[ref], guide_offset, spread), radius=_SEARCH_RADIUS, **match)
     textured = _textured(feats[ref], noise_floor * _PYRDOWN_NOISE**n_down)
-    found = d[textured & (_cost_margin(c_best, c_second, spread) >= min_cost_margin)]
+    unique = textured & (_cost_margin(c_best, c_second, spread) >= min_cost_margin)
+    n_textured = np.count_nonzero(textured)
+    share = np.count_nonzero(unique) / n_textured if n_textured >= _SEARCH_MIN_PIXELS else 0.0
+    return d[unique], float(share), float(2**n_down)
+
+
+def _widen_by_coarse_search(lo, hi, pyramids, t, ref, **search):
+    """The search range ``lo .. hi``, widened where :func:`_coarse_search` finds the scene beyond it.
+
+    Module docstring, step 3d. The robust extremes (the
+    ``_SEARCH_PERCENTILE`` percentiles) of the coarse search's unique,
+    textured winners, scaled to the finest level, replace ``lo`` / ``hi``
+    only where they lie beyond them by more than their own resolution (half
+    a coarse pixel, plus the usual 2 px): the range of the coarse-to-fine
+    field stands wherever the search agrees with it.
+    """
+    found, _, scale = _coarse_search(pyramids, t, ref, **search)
     if found.size < _SEARCH_MIN_PIXELS:
         return lo, hi
     resolution = 0.5 * scale + 2.0
@@ -968,6 +988,27 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, *, guide_offset, spread, n
     if lo_s + resolution < lo:
         lo = lo_s
     return lo, hi
+
+
+def _lost_match_message(share, candidates, pyramids, t, ref, axis, **search) -> str:
+    """The warning for a cost volume that found no unique match at most textured pixels.
+
+    The coarse search runs twice, on the views as given and reversed: when
+    the reversed order matches uniquely at least ``_REVERSED_UNIQUE_SHARE``
+    of the textured pixels and twice the share of the given order, the views
+    are in the wrong order (with a motion too large for the pyramid, whose
+    negative disparities would say so, to follow).
+    """
+    where = f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities {candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN)"
+    as_given = _coarse_search(pyramids, t, ref, **search)[1]
+    reversed_ = _coarse_search(pyramids, -t, ref, **search)[1]
+    if reversed_ >= _REVERSED_UNIQUE_SHARE and reversed_ >= 2.0 * as_given:
+        return (
+            f"{where}: are the views in the wrong order? Reversed, {100.0 * reversed_:.0f} % of the textured pixels of a coarse "
+            f"search match uniquely, against {100.0 * as_given:.0f} % as given. Scene points must shift toward "
+            f"-{'col' if axis == 'x' else 'row'} from the first view to the last (the camera moving toward +X / +Y)"
+        )
+    return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
 
 
 def _search(lo, hi, *, feats, t, ref, guide, radius, match, step_px, spread, textured, min_cost_margin):
@@ -1342,22 +1383,17 @@ def static_stereo(
             textured = _textured(feats[ref], noise_floor)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": cost_step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             d, margin, candidates, step, share = _search(lo, hi, **volume)
+            coarse_search = {"guide_offset": p1, "spread": spread, "noise_floor": noise_floor, "min_cost_margin": min_cost_margin, "match": match}
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
                 # step 3d: has the coarse-to-fine range missed a part of the scene?
-                wide = _widen_by_coarse_search(lo, hi, pyramids, t, ref, guide_offset=p1, spread=spread, noise_floor=noise_floor, min_cost_margin=min_cost_margin, match=match)
+                wide = _widen_by_coarse_search(lo, hi, pyramids, t, ref, **coarse_search)
                 if wide != (lo, hi):
                     retry = _search(*wide, **volume)
                     if retry[-1] < share:
                         d, margin, candidates, step, share = retry
             del volume, feats, src
             if share > _LOST_MATCH_SHARE:
-                warnings.warn(
-                    f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities "
-                    f"{candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN): the scene may lie outside that range "
-                    "(give disparity_range_px / --disparity-range), or the views are not rectified along the baseline",
-                    UserWarning,
-                    stacklevel=2,
-                )
+                warnings.warn(_lost_match_message(share, candidates, pyramids, t, ref, axis, **coarse_search), UserWarning, stacklevel=2)
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
