@@ -135,6 +135,41 @@ def test_reference_at_the_end_and_two_views():
     assert np.median(np.abs(r2.disparity[ok2] - d0)) < 0.02
 
 
+def _cropped_plane_views(d0, positions, shape=(96, 128), margin=40):
+    """Views of a textured plane cropped from a wider texture: the columns that shift out of a view are truly gone."""
+    h, w = shape
+    wide = _texture((h, w + 2 * margin), seed=3)
+    return [_shift_cols(wide, -p * d0)[:, margin : margin + w].astype(np.float32) for p in positions]
+
+
+@pytest.mark.parametrize("d0", [3.0, 12.0])
+@pytest.mark.parametrize(
+    ("positions", "reference"),
+    [((-1, 0), 1), ((0, 1), 0), ((-1, 0, 1), 0), ((-1, 0, 1), 2), ((-1, 0, 1), 1)],
+)
+def test_the_border_no_other_view_sees_is_nan(d0, positions, reference):
+    """Two views, or a reference at the end of the row: the band of ``d0`` columns that
+    leaves every other view has no measurement. Without the ordering test of the row
+    (``_inside_another_view``) its last two columns got in-image "matches" (192 pixels off by
+    more than 1 px, at 3 and at 12 px); now none is, and at most one column more than the band
+    is lost. (Next to the band, a pixel may be half a candidate step off.)"""
+    views = _cropped_plane_views(d0, positions)
+    r = static_stereo(views, reference=reference)
+    w = r.disparity.shape[1]
+    ok = np.isfinite(r.disparity)
+    assert not np.any(np.abs(r.disparity[ok] - d0) > 1.0)
+    t = np.asarray(positions, float) - positions[reference]
+    before, after = -t[t < 0], t[t > 0]
+    # views before the reference lose the right border, those after it the left one:
+    # a band is outside every other view when all of them lie on one side, as wide as the nearest view's shift
+    lost_right = int(np.ceil(d0 * before.min())) if not after.size else 0
+    lost_left = int(np.ceil(d0 * after.min())) if not before.size else 0
+    cols = np.arange(w)
+    seen = (cols >= lost_left + 1) & (cols < w - lost_right - 1)
+    assert ok[:, seen].mean() > 0.99
+    assert not ok[:, : max(lost_left - 1, 0)].any() and not ok[:, w - max(lost_right - 1, 0) :].any()
+
+
 def test_edges_only_and_depth():
     r = static_stereo(_plane_views(2.0), reference=1, edges_only=True)
     assert np.all(np.isnan(r.disparity[~r.edge_mask]))
