@@ -1018,8 +1018,8 @@ def _coarse_search(pyramids, t, ref, *, guide_offset, spread, noise_floor, min_c
     return d[unique], float(share), float(2**n_down)
 
 
-def _widen_by_coarse_search(lo, hi, pyramids, t, ref, **search):
-    """The search range ``lo .. hi``, widened where :func:`_coarse_search` finds the scene beyond it.
+def _widen_by_coarse_search(lo, hi, coarse):
+    """The search range ``lo .. hi``, widened where ``coarse`` (a :func:`_coarse_search` result) finds the scene beyond it.
 
     Module docstring, step 3d. The robust extremes (the
     ``_SEARCH_PERCENTILE`` percentiles) of the coarse search's unique,
@@ -1028,7 +1028,7 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, **search):
     a coarse pixel, plus the usual 2 px): the range of the coarse-to-fine
     field stands wherever the search agrees with it.
     """
-    found, _, scale = _coarse_search(pyramids, t, ref, **search)
+    found, _, scale = coarse
     if found.size < _SEARCH_MIN_PIXELS:
         return lo, hi
     resolution = 0.5 * scale + 2.0
@@ -1041,7 +1041,7 @@ def _widen_by_coarse_search(lo, hi, pyramids, t, ref, **search):
     return lo, hi
 
 
-def _lost_match_message(share, candidates, pyramids, t, ref, axis, **search) -> str:
+def _lost_match_message(share, candidates, pyramids, t, ref, axis, *, as_given=None, **search) -> str:
     """The warning for a cost volume that found no unique match at most textured pixels.
 
     The coarse search runs twice, on the views as given and reversed: when
@@ -1051,7 +1051,7 @@ def _lost_match_message(share, candidates, pyramids, t, ref, axis, **search) -> 
     negative disparities would say so, to follow).
     """
     where = f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities {candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN)"
-    as_given = _coarse_search(pyramids, t, ref, **search)[1]
+    as_given = (as_given if as_given is not None else _coarse_search(pyramids, t, ref, **search))[1]
     reversed_ = _coarse_search(pyramids, -t, ref, **search)[1]
     if reversed_ >= _REVERSED_UNIQUE_SHARE and reversed_ >= 2.0 * as_given:
         return (
@@ -1434,17 +1434,20 @@ def static_stereo(
             textured = _textured(feats[ref], noise_floor)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": cost_step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             d, margin, candidates, step, share = _search(lo, hi, **volume)
+            as_given = None  # the coarse search of step 3d, when it runs
             coarse_search = {"guide_offset": p1, "spread": spread, "noise_floor": noise_floor, "min_cost_margin": min_cost_margin, "match": match}
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
                 # step 3d: has the coarse-to-fine range missed a part of the scene?
-                wide = _widen_by_coarse_search(lo, hi, pyramids, t, ref, **coarse_search)
+                as_given = _coarse_search(pyramids, t, ref, **coarse_search)
+                wide = _widen_by_coarse_search(lo, hi, as_given)
                 if wide != (lo, hi):
                     retry = _search(*wide, **volume)
                     if retry[-1] < share:
                         d, margin, candidates, step, share = retry
             del volume, feats, src
             if share > _LOST_MATCH_SHARE:
-                warnings.warn(_lost_match_message(share, candidates, pyramids, t, ref, axis, **coarse_search), UserWarning, stacklevel=2)
+                message = _lost_match_message(share, candidates, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
+                warnings.warn(message, UserWarning, stacklevel=2)
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
