@@ -228,6 +228,16 @@ def test_cli_disparity_range(plane_files, tmp_path, capsys):
     np.testing.assert_array_equal(read_pfm(out), lib.disparity)
 
 
+def test_cli_bad_disparity_range_before_reading_the_views(tmp_path, capsys):
+    """A bad range is a usage error, found before any view is read (as the other options)."""
+    from nfdepth.cli import main
+
+    missing = [str(tmp_path / f"none{k}.png") for k in range(3)]
+    code = main(["stereo", *missing, "--disparity-range", "9", "1", "--out", str(tmp_path / "d.pfm")])
+    _, err = capsys.readouterr()
+    assert code == 2 and "--disparity-range must be two finite numbers MIN < MAX, got 9 1" in err
+
+
 def _rig_file(tmp_path, stereo_lines):
     path = tmp_path / "rig.toml"
     path.write_text("[camera]\nfocal_px = 100\nwidth_px = 80\nheight_px = 60\n[stereo]\nbaseline = 0.1\n" + stereo_lines)

@@ -352,6 +352,10 @@ def _cmd_stereo(args) -> int:
         column_reference = len(column) // 2 if args.column_reference is None else args.column_reference
         if not 0 <= column_reference < len(column):
             raise CLIError(f"--column-reference must index one of the {len(column)} column views (0..{len(column) - 1}), got {column_reference}")
+    if args.disparity_range is not None:
+        lo, hi = args.disparity_range
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise CLIError(f"--disparity-range must be two finite numbers MIN < MAX, got {lo:g} {hi:g}")
     outputs = [_check_output(args.out, force=args.force)]
     if args.fill_mask and not args.fill:
         raise CLIError("--fill-mask needs --fill")
@@ -390,10 +394,7 @@ def _cmd_stereo(args) -> int:
     if args.threads is not None:
         options["threads"] = args.threads
     if args.disparity_range is not None:
-        lo, hi = args.disparity_range
-        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-            raise CLIError(f"--disparity-range must be two finite numbers MIN < MAX, got {lo:g} {hi:g}")
-        options["disparity_range_px"] = (lo, hi)
+        options["disparity_range_px"] = tuple(args.disparity_range)
     if column:
         from .xy_stereo import static_stereo_xy
 

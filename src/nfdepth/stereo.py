@@ -1044,19 +1044,20 @@ def _widen_by_coarse_search(lo, hi, coarse):
 def _lost_match_message(share, candidates, pyramids, t, ref, axis, *, as_given=None, **search) -> str:
     """The warning for a cost volume that found no unique match at most textured pixels.
 
-    The coarse search runs twice, on the views as given and reversed: when
+    ``as_given``: the :func:`_coarse_search` of the views as given, when step
+    3d has run it (else it runs here). The coarse search runs twice, on the views as given and reversed: when
     the reversed order matches uniquely at least ``_REVERSED_UNIQUE_SHARE``
     of the textured pixels and twice the share of the given order, the views
     are in the wrong order (with a motion too large for the pyramid, whose
     negative disparities would say so, to follow).
     """
     where = f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities {candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN)"
-    as_given = (as_given if as_given is not None else _coarse_search(pyramids, t, ref, **search))[1]
-    reversed_ = _coarse_search(pyramids, -t, ref, **search)[1]
-    if reversed_ >= _REVERSED_UNIQUE_SHARE and reversed_ >= 2.0 * as_given:
+    given_share = (as_given if as_given is not None else _coarse_search(pyramids, t, ref, **search))[1]
+    reversed_share = _coarse_search(pyramids, -t, ref, **search)[1]
+    if reversed_share >= _REVERSED_UNIQUE_SHARE and reversed_share >= 2.0 * given_share:
         return (
-            f"{where}: are the views in the wrong order? Reversed, {100.0 * reversed_:.0f} % of the textured pixels of a coarse "
-            f"search match uniquely, against {100.0 * as_given:.0f} % as given. Scene points must shift toward "
+            f"{where}: are the views in the wrong order? Reversed, {100.0 * reversed_share:.0f} % of the textured pixels of a coarse "
+            f"search match uniquely, against {100.0 * given_share:.0f} % as given. Scene points must shift toward "
             f"-{'col' if axis == 'x' else 'row'} from the first view to the last (the camera moving toward +X / +Y)"
         )
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
