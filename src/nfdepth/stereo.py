@@ -62,7 +62,13 @@ measurement in a coarse-to-fine warping scheme:
    wins; an equiangular sub-sample fit; a 3 x 3 median. Pixels whose best
    cost is not at least ``min_cost_margin`` (relative) below the best cost
    more than 1 px away are ``UNCERTAIN`` (ambiguous: textureless or
-   repetitive), as are edge points below ``edge_cost_margin``. The dense
+   repetitive), as are edge points below ``edge_cost_margin``. So are
+   winners at an end of the automatic range (2 px beyond the field's
+   robust extremes): they are no minimum, their match lies outside the
+   range (on Motorcycle, two views, 893 such pixels next to the border
+   the other view loses, all off by more than 1 px; a one-level field
+   that misses the scene reported it at the range's end). The ends of a
+   given range, and an end that step 3d widened, keep their winners. The dense
    uncertainty is the normal-flow information summed over the same window,
    plus the sub-sample bias of the winner (see "Uncertainty" below).
    Measured on Middlebury 2005 this beats the differential dense field
@@ -88,8 +94,9 @@ measurement in a coarse-to-fine warping scheme:
    percentiles) of that search's unique, textured winners lie beyond the
    range by more than the search's resolution, the cost volume is run again
    over the widened range, and that result is kept if fewer textured
-   pixels are ambiguous in it (a periodic texture, whose aliases the wider
-   range lets in, keeps the first). On the seven real scenes (three and
+   pixels are unmatched in it -- ambiguous, or at an end of the first
+   range (a periodic texture, whose aliases the wider range lets in, keeps
+   the first). On the seven real scenes (three and
    all views) the search agrees with the field, so every output is
    unchanged. With ``levels=1`` (the paper's single-level method) there is
    no search. ``disparity_range_px`` gives the range instead (as SGBM's
@@ -1063,21 +1070,27 @@ def _lost_match_message(share, candidates, pyramids, t, ref, axis, *, as_given=N
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
 
 
-def _search(lo, hi, *, feats, t, ref, guide, radius, match, step_px, spread, textured, min_cost_margin):
-    """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share of ambiguous textured pixels)``."""
+def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, spread, textured, min_cost_margin):
+    """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share, at_end)``.
+
+    ``at_end`` marks the winners at an end of the range that ``ends`` (lower,
+    upper) rejects; ``share`` is the share of the textured pixels with no
+    unique match inside the range: ambiguous (cost margin below
+    ``min_cost_margin``) or ``at_end`` (0 when there are too few textured pixels).
+    """
     candidates, step = _candidates(lo, hi, step_px)
     # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
     d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, **match)
     # uniqueness: the best cost against the best one more than 1 px away
     margin = _cost_margin(c_best, c_second, spread)
-    return d, margin, candidates, step, _ambiguous_share(margin, textured, min_cost_margin)
-
-
-def _ambiguous_share(margin, textured, min_cost_margin) -> float:
-    """Share of the textured pixels whose cost margin is below ``min_cost_margin`` (0 when there are too few, or no test)."""
-    if min_cost_margin <= 0 or np.count_nonzero(textured) < _SEARCH_MIN_PIXELS:
-        return 0.0
-    return float(np.mean(~(margin[textured] >= min_cost_margin)))
+    at_end = ((d <= np.float32(candidates[0])) & ends[0]) | ((d >= np.float32(candidates[-1])) & ends[1])
+    share = 0.0
+    if np.count_nonzero(textured) >= _SEARCH_MIN_PIXELS:
+        unmatched = at_end[textured]
+        if min_cost_margin > 0:
+            unmatched = unmatched | ~(margin[textured] >= min_cost_margin)
+        share = float(np.mean(unmatched))
+    return d, margin, candidates, step, share, at_end
 
 
 def _check_positions(positions, n, reference):
@@ -1434,7 +1447,13 @@ def static_stereo(
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": cost_step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
-            d, margin, candidates, step, share = _search(lo, hi, **volume)
+            # A winner at an end of the range is no minimum: beyond an end 2 px past
+            # the field's robust extreme, its match lies outside the range
+            # (UNCERTAIN). A given range is the caller's statement that the scene
+            # lies within it, and an end the coarse search widened lies at that
+            # search's resolution: their ends keep their winners.
+            ends = (False, False) if search_range is not None else (True, True)
+            d, margin, candidates, step, share, at_end = _search(lo, hi, ends=ends, **volume)
             as_given = None  # the coarse search of step 3d, when it runs
             coarse_search = {"guide_offset": p1, "spread": spread, "noise_floor": noise_floor, "min_cost_margin": min_cost_margin, "match": match}
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
@@ -1442,9 +1461,9 @@ def static_stereo(
                 as_given = _coarse_search(pyramids, t, ref, **coarse_search)
                 wide = _widen_by_coarse_search(lo, hi, as_given)
                 if wide != (lo, hi):
-                    retry = _search(*wide, **volume)
-                    if retry[-1] < share:
-                        d, margin, candidates, step, share = retry
+                    retry = _search(*wide, ends=(wide[0] == lo, wide[1] == hi), **volume)
+                    if retry[4] < share:
+                        d, margin, candidates, step, share, at_end = retry
             del volume, feats, src
             if share > _LOST_MATCH_SHARE:
                 message = _lost_match_message(share, candidates, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
@@ -1496,6 +1515,8 @@ def static_stereo(
     reason[~np.isfinite(std)] = Reason.UNDETERMINABLE
     if cost_volume and min_cost_margin > 0:
         reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
+    if cost_volume:
+        reason[(reason == Reason.OK) & at_end] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
     if np.isfinite(dense_reach_px):
@@ -1530,6 +1551,8 @@ def static_stereo(
         r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d_dense_e) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
         if cost_volume and edge_cost_margin > 0:
             r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
+        if cost_volume:
+            r_e[(r_e == Reason.OK) & at_end[er, ec]] = Reason.UNCERTAIN
         if edge_step_px > 0:
             # along the baseline (where occlusions lie) and across the edge (its normal)
             normal = (m.grad_row[er, ec] / g_mag, m.grad_col[er, ec] / g_mag)
