@@ -1180,9 +1180,12 @@ def static_stereo(
     reference : int
         Index of the view that gets the output.
     positions : sequence of float, optional
-        Camera positions along the baseline in units of the neighbour spacing,
-        strictly increasing; default ``0, 1, 2, ...``. The disparity is per
-        unit of position.
+        Camera positions along the baseline, strictly increasing, in any
+        unit (steps, mm, baselines); default ``0, 1, 2, ...``. The disparity,
+        its uncertainty, ``disparity_range_px`` and ``search_range_px`` are
+        px per unit of position; every other option in px (steps, bounds,
+        disagreements) is a shift in the view nearest the reference, so the
+        map does not depend on the unit.
     axis : {"x", "y"}
         Baseline direction. ``"y"`` is ``"x"`` on the transposed views.
     sigma_px : float
@@ -1216,8 +1219,8 @@ def static_stereo(
         Standard deviation of the window over which each view's match to the
         reference is measured for occlusion weighting (px).
     max_std_px : float
-        Dense pixels whose predicted std (px per unit position) exceeds this
-        are ``UNCERTAIN`` (NaN).
+        Dense pixels whose predicted std (px of shift in the view nearest
+        the reference; see ``positions``) exceeds this are ``UNCERTAIN`` (NaN).
     dense_reach_px : float
         Dense pixels farther than this (px) from every pixel with information
         of its own (a column gradient whose single-pixel std would be within
@@ -1370,6 +1373,13 @@ def static_stereo(
         threads = max(1, cv2.getNumThreads())
     else:
         threads = check_int("threads", threads, 1)
+    # Work in px of shift of the view nearest the reference, whatever unit the
+    # positions are in: every step and bound in px (cost_step_px, max_std_px,
+    # ...) is a shift in that view. The outputs go back to px per unit of position.
+    unit = float(np.min(np.abs(t[t != 0])))
+    t = t / unit
+    if search_range is not None:
+        search_range = (search_range[0] * unit, search_range[1] * unit)
     if axis == "y":
         views = [np.ascontiguousarray(v.T) for v in views]
     shape = views[0].shape
@@ -1466,7 +1476,7 @@ def static_stereo(
                         d, margin, candidates, step, share, at_end = retry
             del volume, feats, src
             if share > _LOST_MATCH_SHARE:
-                message = _lost_match_message(share, candidates, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
+                message = _lost_match_message(share, np.asarray(candidates) / unit, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
                 warnings.warn(message, UserWarning, stacklevel=2)
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
@@ -1603,8 +1613,8 @@ def static_stereo(
             stacklevel=2,
         )
     bad = reason != Reason.OK
-    disparity = np.where(bad, np.nan, disparity).astype(np.float32)
-    std = np.where(bad, np.nan, std).astype(np.float32)
+    disparity = np.where(bad, np.nan, disparity / unit).astype(np.float32)
+    std = np.where(bad, np.nan, std / unit).astype(np.float32)
     if axis == "y":
         disparity, std, edge_mask, reason = (np.ascontiguousarray(a.T) for a in (disparity, std, edge_mask, reason))
     return StereoResult(
@@ -1616,5 +1626,5 @@ def static_stereo(
         runtime_s=time.perf_counter() - start,
         noise_std=noise,
         axis=axis,
-        search_range_px=(float(candidates[0]), float(candidates[-1])) if cost_volume else None,
+        search_range_px=(float(candidates[0]) / unit, float(candidates[-1]) / unit) if cost_volume else None,
     )
