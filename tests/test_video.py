@@ -424,3 +424,83 @@ def test_video_cli_figure(tmp_path, capsys, sequence_dir, rail_rig):
     assert code == 4 and "--figure" in err and not (tmp_path / "e.npz").exists()
     code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "e.npz", "--figure", tmp_path / "f.jpg")
     assert code == 2 and "must end in one of .png" in err
+
+
+# ------------------------------------------------------------------ static and reversed camera motion
+
+
+def _static_poses(tmp_path, name, xs):
+    p = tmp_path / name
+    p.write_text("frame,x,y,z\n" + "".join(f"{k},{x},0,0\n" for k, x in enumerate(xs)))
+    return p
+
+
+def test_static_camera_refused(tmp_path, scene):
+    """No frame triple with a baseline: an error, not an all-NaN result."""
+    frames = list(scene.frames[:5])
+    with pytest.raises(ValueError, match=r"positions: the camera does not move: all 5 positions are \(2, 0, 0\); expected camera positions"):
+        next(depth_from_video(frames, camera=scene.camera, positions=np.tile([2.0, 0.0, 0.0], (5, 1))))
+    rig_file = tmp_path / "r.toml"
+    rig_file.write_text(f'[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\nposes = "{_static_poses(tmp_path, "z.csv", [0] * 5).name}"\n')
+    with pytest.raises(RigError, match=r"poses '.*z\.csv': the camera does not move: all 5 positions are \(0, 0, 0\)"):
+        next(depth_from_video(frames, rig=load_rig(rig_file)))
+    # back and forth: the positions change, but every frame's neighbours coincide
+    gen = depth_from_video(frames, camera=scene.camera, positions=[[x, 0, 0] for x in (0, 1, 0, 1, 0)])
+    with pytest.raises(ValueError, match=r"does not move in any of the 3 frame triples \(frames 1-3 have the same position"):
+        next(gen)
+
+
+def test_static_triples_skipped_with_one_warning(scene):
+    """Some triples move and some do not: the static ones are skipped, with one warning saying how many."""
+    xs = [0, 0, 0, 1, 2, 3, 4, 4, 4]  # frames 1 and 7 have coinciding neighbours
+    frames = [scene.frames[max(0, min(x, N_FRAMES - 1))] for x in xs]
+    with pytest.warns(UserWarning) as record:
+        results = list(depth_from_video(frames, camera=scene.camera, positions=[[x, 0, 0] for x in xs]))
+    assert [r.index for r in results] == list(range(1, 8))
+    assert len(record) == 1, [str(w.message) for w in record]
+    text = str(record[0].message)
+    assert text.startswith("the camera does not move around 2 of 7 frames (1, 7: the same position one frame before and after)")
+    assert "\n" not in text
+    first, last = results[0], results[-1]
+    assert first.baseline == 0 and not np.any(np.isfinite(first.inverse_depth)) and not first.count.any()
+    assert last.baseline == 0 and not last.measured.any()
+    # frame 7 carries over the fused depth of frame 6
+    assert np.isfinite(last.inverse_depth).sum() > 300
+    assert results[3].measured.sum() > 300
+
+
+def test_video_cli_static_camera(tmp_path, capsys, sequence_dir, rail_rig):
+    for name, xs in (("zero.csv", [0] * N_FRAMES), ("wobble.csv", [k % 2 for k in range(N_FRAMES)])):
+        poses = _static_poses(tmp_path, name, xs)
+        for out in (tmp_path / "s.npz", tmp_path / "folder"):
+            code, stdout, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", poses, "--out", out, "--quiet")
+            assert code == 2, err
+            assert err.count("\n") == 1 and err.startswith("nfdepth: error: ") and "the camera does not move" in err, err
+            assert "baseline" in err and stdout == ""
+            assert not out.exists()
+
+
+def test_video_reversed_motion_warns_once(tmp_path, capsys, scene, sequence_dir, rail_rig):
+    """Poses moving the wrong way: one summary warning per run, naming the poses, not `direction`."""
+    with pytest.warns(UserWarning) as record:
+        results = list(depth_from_video(list(scene.frames), camera=scene.camera, velocity=(-1.0, 0.0, 0.0)))
+    assert len(results) == N_FRAMES - 2
+    assert len(record) == 1, [str(w.message) for w in record]
+    text = str(record[0].message)
+    n = N_FRAMES - 2
+    assert text.startswith(f"in {n} of {n} frames (1-{n}) most edge points came out behind the camera (")
+    assert "the camera moves opposite to its given positions" in text and "poses' x, y, z" in text and "same order" in text
+    assert "direction" not in text and "\n" not in text
+    points = int(text.split("(")[2].split(" of ")[0])
+    assert points > 300 * n
+
+    poses = _static_poses(tmp_path, "rev.csv", [-k for k in range(N_FRAMES)])
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", poses, "--out", tmp_path / "r.npz", "--quiet")
+    assert code == 0, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"nfdepth: warning: in {n} of {n} frames (1-{n}) most edge points"), err
+    assert "direction" not in err
+    # the right way round: no warning
+    poses = _static_poses(tmp_path, "fwd.csv", list(range(N_FRAMES)))
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", poses, "--out", tmp_path / "f.npz", "--quiet")
+    assert code == 0 and err == ""

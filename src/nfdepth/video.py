@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import glob as _glob
 import re
+import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,9 +77,10 @@ from scipy.spatial.transform import Rotation
 
 from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite
 from .camera import PinholeCamera
+from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
 from .normal_flow import estimate_noise_std
-from .pipelines import EdgeDepth, static_stereo_edges
+from .pipelines import _ORDER_CHECK_MIN_POINTS, EdgeDepth, static_stereo_edges
 from .rig import Rig, RigError, VideoSpec, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 
 __all__ = [
@@ -361,6 +363,7 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
         if rig.video is None:
             where = f"rig '{rig.source}'" if rig.source else "the rig"
             raise RigError(f"{where} has no [video] section: expected video.velocity, video.positions or video.poses")
+        _check_spec_moves(rig.video, rig)
         return rig.video
     if velocity is not None:
         v = np.asarray(velocity, dtype=float)
@@ -372,7 +375,46 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
     if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
         msg = f"positions must have shape (N, 3) with finite values, got shape {p.shape}"
         raise ValueError(msg)
+    if len(p) and np.all(p == p[0]):
+        raise ValueError(f"positions: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
     return VideoSpec(positions=p)
+
+
+#: What a camera without motion is told (no baseline, no depth).
+_MOVE_HINT = "expected camera positions that change from frame to frame (depth needs a baseline between frames)"
+
+#: The pipeline's per-triple ordering warning, replaced by one summary per run.
+_BEHIND_WARNING = r"\d+ of \d+ determinable edge points have a negative inverse depth"
+
+
+def _vec(v) -> str:
+    return "(" + ", ".join(f"{float(x) + 0.0:g}" for x in v) + ")"
+
+
+def _frame_list(frames: list[int], most: int = 6) -> str:
+    """``[1, 2, 3, 7]`` -> ``"1-3, 7"`` (at most ``most`` runs, then ``...``)."""
+    runs: list[list[int]] = []
+    for f in frames:
+        if runs and f == runs[-1][1] + 1:
+            runs[-1][1] = f
+        else:
+            runs.append([f, f])
+    text = [str(a) if a == b else f"{a}-{b}" for a, b in runs[:most]]
+    return ", ".join(text) + (", ..." if len(runs) > most else "")
+
+
+def _check_spec_moves(spec: VideoSpec, rig: Rig | None) -> None:
+    """Refuse a rig's positions / poses in which the camera never moves."""
+    if spec.poses is not None:
+        p = spec.poses.positions
+        what = f"poses '{spec.poses.source}'" if spec.poses.source is not None else "poses"
+    elif spec.positions is not None:
+        p = spec.positions
+        what = f"rig '{rig.source}': video.positions" if rig is not None and rig.source else "video.positions"
+    else:
+        return  # a velocity is checked non-zero where it is read
+    if len(p) and np.all(p == p[0]):
+        raise RigError(f"{what}: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
 
 
 def _camera_rotation(spec: VideoSpec, frame: int, reference) -> np.ndarray:
@@ -439,13 +481,26 @@ def depth_from_video(
     VideoDepthFrame
         One per frame that has a neighbour on each side (frames
         ``1 .. N-2``), each yielded once the following frame has arrived.
-        A triple in which the camera does not move gives no measurement;
-        the state is carried over (predicted) instead.
+        A triple in which the camera does not move (the positions one frame
+        before and after coincide) gives no measurement; the state is
+        carried over (predicted) instead. Frames before the first triple
+        that moves are held back (they are empty) until it arrives, so a
+        run in which no triple moves yields nothing.
 
     Raises
     ------
     RigError, ValueError
-        Size mismatch with the rig's camera, no motion given, rotating poses.
+        Size mismatch with the rig's camera, no motion given, rotating
+        poses, positions / poses that never change, or (at the end of the
+        frames) no triple in which the camera moves.
+
+    Warns
+    -----
+    UserWarning
+        Once per run, at its end: when some triples do not move (how many,
+        which frames), and when in some triples most edge points come out
+        behind the camera (the camera moves opposite to its given positions:
+        a sign or ordering mistake in the poses / velocity / positions).
     """
     spec = _positions_from(rig, velocity, positions)
     cam = camera if camera is not None else (rig.camera if rig is not None else None)
@@ -463,6 +518,12 @@ def depth_from_video(
     state: _State | None = None
     prev_pos = None
     rot0 = None
+    moved = False
+    held: list[tuple[int, np.ndarray, float]] = []  # static frames before the first one that moves
+    static: list[int] = []
+    behind_frames: list[int] = []
+    behind_points = determinable_points = 0
+    triples = 0
     for n, frame in enumerate(frames):
         img = as_image(f"frame {first + n}", frame, dtype=np.float32)
         if img.shape != cam.shape:
@@ -476,6 +537,7 @@ def depth_from_video(
         if len(window) > 3:
             window.pop(0)
         k = first + n - 1
+        triples += 1
         if rot0 is None:
             rot0 = _camera_rotation(spec, k - 1, None)
         rmat = Rotation.from_rotvec(np.deg2rad(_camera_rotation(spec, k, rot0))).as_matrix()
@@ -483,21 +545,31 @@ def depth_from_video(
         _camera_rotation(spec, k + 1, rot0)
         step_cam = rmat.T @ ((p_next - p_prev) / 2.0)  # world -> camera axes
         baseline = float(np.linalg.norm(step_cam))
+        # no baseline: zero, or rounding noise of equal positions
+        moves = baseline > 1e-9 * max(float(np.linalg.norm(p_prev)), float(np.linalg.norm(p_next)))
 
         shape = cam.shape
         rho_m = np.full(shape, np.nan)
         var_m = np.full(shape, np.nan)
-        if baseline > 0:
-            res = static_stereo_edges(
-                window,
-                camera=cam,
-                baseline=baseline,
-                direction=step_cam,
-                sigma_px=sigma_px,
-                stencil=stencil,
-                min_cos=min_cos,
-                noise_std=noise_std,
-            )
+        if moves:
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
+                res = static_stereo_edges(
+                    window,
+                    camera=cam,
+                    baseline=baseline,
+                    direction=step_cam,
+                    sigma_px=sigma_px,
+                    stencil=stencil,
+                    min_cos=min_cos,
+                    noise_std=noise_std,
+                )
+            behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
+            ahead = int(np.count_nonzero(res.inverse_depth.reason == Reason.OK))
+            if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:
+                behind_frames.append(k)
+                behind_points += behind
+                determinable_points += behind + ahead
             ok = res.valid
             ii = np.floor(res.rows[ok]).astype(np.int64)
             jj = np.floor(res.cols[ok]).astype(np.int64)
@@ -507,6 +579,8 @@ def depth_from_video(
             std = np.where(np.isfinite(std), np.maximum(std, floor), floor)
             rho_m[ii, jj] = rho
             var_m[ii, jj] = std**2
+        else:
+            static.append(k)
 
         if state is None:
             state = _State(shape)
@@ -515,6 +589,14 @@ def depth_from_video(
             state = _predict(state, cam, disp, process_noise)
         state = _update(state, rho_m, var_m, gate=gate, max_age=max_age)
         prev_pos = p_mid
+        if not moves and not moved:
+            held.append((k, np.asarray(p_mid, dtype=float).copy(), baseline))  # empty so far: no state yet
+            continue
+        if not moved:
+            moved = True
+            for hk, hpos, hbase in held:
+                yield _empty_frame(shape, hk, hpos, hbase)
+            held = []
         yield VideoDepthFrame(
             index=k,
             inverse_depth=state.rho.astype(np.float32),
@@ -525,6 +607,43 @@ def depth_from_video(
             camera_position=np.asarray(p_mid, dtype=float).copy(),
             baseline=baseline,
         )
+
+    if triples and not moved:
+        raise ValueError(
+            f"the camera does not move in any of the {triples} frame triples (frames {_frame_list(static)} have the same position"
+            f" one frame before and after), so no depth can be measured: {_MOVE_HINT}"
+        )
+    if static:
+        warnings.warn(
+            f"the camera does not move around {len(static)} of {triples} frames ({_frame_list(static)}: the same position one frame"
+            " before and after): they have no measurement of their own and carry the fused depth of the frames before",
+            UserWarning,
+            stacklevel=2,
+        )
+    if behind_frames:
+        warnings.warn(
+            f"in {len(behind_frames)} of {triples} frames ({_frame_list(behind_frames)}) most edge points came out behind the camera"
+            f" ({behind_points} of {determinable_points} determinable points, dropped): the camera moves opposite to its given"
+            " positions; check the sign of the poses' x, y, z (or of [video] velocity / positions) and that frames and poses"
+            " are in the same order",
+            UserWarning,
+            stacklevel=2,
+        )
+
+
+def _empty_frame(shape, index: int, position: np.ndarray, baseline: float) -> VideoDepthFrame:
+    """A frame with no estimate yet (a static triple before the camera first moves)."""
+    nan = np.full(shape, np.nan, dtype=np.float32)
+    return VideoDepthFrame(
+        index=index,
+        inverse_depth=nan,
+        inverse_depth_std=nan.copy(),
+        measured_inverse_depth=nan.copy(),
+        measured_inverse_depth_std=nan.copy(),
+        count=np.zeros(shape, dtype=np.uint16),
+        camera_position=position,
+        baseline=baseline,
+    )
 
 
 # ------------------------------------------------------------------ writing
