@@ -48,6 +48,8 @@ def _texture(shape=(32, 32), seed=0, shift=0.0):
 TEX = _texture()
 FRAMES5 = [TEX] * 5
 VIEWS3 = [TEX] * 3
+#: three distinct views of a camera stepping 1 px toward +x (dense stereo warns about identical views)
+STEREO3 = [_texture(shift=s) for s in (0.0, 1.0, 2.0)]
 
 
 # ------------------------------------------------------------------ library
@@ -138,39 +140,39 @@ BAD_LIBRARY_CALLS = [
     ("edges border", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, border_px=-1), ValueError, "border_px must be an integer >= 0, got -1"),
     # dense stereo (public API)
     ("stereo 1 view", _call(stereo.static_stereo, [TEX], reference=0), ValueError, "views must hold at least 2 frames, got 1"),
-    ("stereo reference", _call(stereo.static_stereo, VIEWS3, reference=3), ValueError, "reference must be a view index in 0..2, got 3"),
-    ("stereo reference bool", _call(stereo.static_stereo, VIEWS3, reference=True), TypeError, "reference must be an int view index, got True"),
-    ("stereo wrong order", _call(stereo.static_stereo, VIEWS3, reference=1, positions=[2, 1, 0]), ValueError, "positions must be strictly increasing"),
-    ("stereo positions len", _call(stereo.static_stereo, VIEWS3, reference=1, positions=[0, 1]), ValueError, "positions must hold one number per view (3), got shape (2,)"),
-    ("stereo positions nan", _call(stereo.static_stereo, VIEWS3, reference=1, positions=[0, 1, np.nan]), ValueError, "positions must be finite"),
-    ("stereo axis", _call(stereo.static_stereo, VIEWS3, reference=1, axis="z"), ValueError, "axis must be 'x' or 'y', got 'z'"),
-    ("stereo threads", _call(stereo.static_stereo, VIEWS3, reference=1, threads=0), ValueError, "threads must be an integer >= 1, got 0"),
-    ("stereo threads float", _call(stereo.static_stereo, VIEWS3, reference=1, threads=1.5), TypeError, "threads must be an integer >= 1, got 1.5"),
-    ("stereo cost step", _call(stereo.static_stereo, VIEWS3, reference=1, cost_step_px=0.0), ValueError, "cost_step_px must be a positive finite number, got 0.0"),
-    ("stereo cost step nan", _call(stereo.static_stereo, VIEWS3, reference=1, cost_step_px=np.nan), ValueError, "cost_step_px must be a positive finite number, got nan"),
-    ("stereo cost radius", _call(stereo.static_stereo, VIEWS3, reference=1, cost_radius=0), ValueError, "cost_radius must be an integer >= 1, got 0"),
-    ("stereo cost radius float", _call(stereo.static_stereo, VIEWS3, reference=1, cost_radius=2.5), TypeError, "cost_radius must be an integer >= 1, got 2.5"),
-    ("stereo cost alpha", _call(stereo.static_stereo, VIEWS3, reference=1, cost_alpha=2), ValueError, "cost_alpha must be within [0, 1], got 2"),
-    ("stereo cost tau", _call(stereo.static_stereo, VIEWS3, reference=1, cost_tau_i=0.0), ValueError, "cost_tau_i must be a positive finite number, got 0.0"),
-    ("stereo cost eps", _call(stereo.static_stereo, VIEWS3, reference=1, cost_eps=-1e-4), ValueError, "cost_eps must be a positive finite number, got -0.0001"),
-    ("stereo cost median", _call(stereo.static_stereo, VIEWS3, reference=1, cost_median_px=4), ValueError, "cost_median_px must be 0, 1, 3 or 5, got 4"),
-    ("stereo cost margin", _call(stereo.static_stereo, VIEWS3, reference=1, min_cost_margin=-1), ValueError, "min_cost_margin must be a finite number >= 0, got -1"),
-    ("stereo edge step", _call(stereo.static_stereo, VIEWS3, reference=1, edge_step_px=-1), ValueError, "edge_step_px must be a finite number >= 0, got -1"),
-    ("stereo disagreement", _call(stereo.static_stereo, VIEWS3, reference=1, max_edge_disagreement_px=0), ValueError, "max_edge_disagreement_px must be a number > 0 (inf: no limit), got 0"),
-    ("stereo edge std nan", _call(stereo.static_stereo, VIEWS3, reference=1, max_edge_std_px=float("nan")), ValueError, "max_edge_std_px must be a number > 0 (inf: no limit), got nan"),
-    ("stereo edge std str", _call(stereo.static_stereo, VIEWS3, reference=1, max_edge_std_px="wide"), TypeError, "max_edge_std_px must be a number > 0 (inf: no limit), got 'wide'"),
-    ("stereo iterations", _call(stereo.static_stereo, VIEWS3, reference=1, iterations_per_level=2.5), TypeError, "iterations_per_level must be an integer >= 1, got 2.5"),
-    ("stereo edge iterations", _call(stereo.static_stereo, VIEWS3, reference=1, edge_iterations=-1), ValueError, "edge_iterations must be an integer >= 0, got -1"),
-    ("stereo schedule", _call(stereo.static_stereo, VIEWS3, reference=1, view_schedule="yes"), TypeError, "view_schedule must be True or False, got 'yes'"),
-    ("stereo guided eps", _call(stereo.static_stereo, VIEWS3, reference=1, guided_eps=-1.0), ValueError, "guided_eps must be a positive finite number, got -1.0"),
-    ("stereo polish radius", _call(stereo.static_stereo, VIEWS3, reference=1, polish_radius=0), ValueError, "polish_radius must be an integer >= 1, got 0"),
-    ("stereo select window", _call(stereo.static_stereo, VIEWS3, reference=1, select_window_px=0), ValueError, "select_window_px must be a positive finite number, got 0"),
-    ("stereo min_cos", _call(stereo.static_stereo, VIEWS3, reference=1, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2"),
-    ("stereo corner ratio", _call(stereo.static_stereo, VIEWS3, reference=1, max_corner_ratio=-0.1), ValueError, "max_corner_ratio must be within [0, 1], got -0.1"),
-    ("stereo levels", _call(stereo.static_stereo, VIEWS3, reference=1, levels=99), ValueError, "levels must be >= 1 and leave at least 4 px at the coarsest level, got 99"),
+    ("stereo reference", _call(stereo.static_stereo, STEREO3, reference=3), ValueError, "reference must be a view index in 0..2, got 3"),
+    ("stereo reference bool", _call(stereo.static_stereo, STEREO3, reference=True), TypeError, "reference must be an int view index, got True"),
+    ("stereo wrong order", _call(stereo.static_stereo, STEREO3, reference=1, positions=[2, 1, 0]), ValueError, "positions must be strictly increasing"),
+    ("stereo positions len", _call(stereo.static_stereo, STEREO3, reference=1, positions=[0, 1]), ValueError, "positions must hold one number per view (3), got shape (2,)"),
+    ("stereo positions nan", _call(stereo.static_stereo, STEREO3, reference=1, positions=[0, 1, np.nan]), ValueError, "positions must be finite"),
+    ("stereo axis", _call(stereo.static_stereo, STEREO3, reference=1, axis="z"), ValueError, "axis must be 'x' or 'y', got 'z'"),
+    ("stereo threads", _call(stereo.static_stereo, STEREO3, reference=1, threads=0), ValueError, "threads must be an integer >= 1, got 0"),
+    ("stereo threads float", _call(stereo.static_stereo, STEREO3, reference=1, threads=1.5), TypeError, "threads must be an integer >= 1, got 1.5"),
+    ("stereo cost step", _call(stereo.static_stereo, STEREO3, reference=1, cost_step_px=0.0), ValueError, "cost_step_px must be a positive finite number, got 0.0"),
+    ("stereo cost step nan", _call(stereo.static_stereo, STEREO3, reference=1, cost_step_px=np.nan), ValueError, "cost_step_px must be a positive finite number, got nan"),
+    ("stereo cost radius", _call(stereo.static_stereo, STEREO3, reference=1, cost_radius=0), ValueError, "cost_radius must be an integer >= 1, got 0"),
+    ("stereo cost radius float", _call(stereo.static_stereo, STEREO3, reference=1, cost_radius=2.5), TypeError, "cost_radius must be an integer >= 1, got 2.5"),
+    ("stereo cost alpha", _call(stereo.static_stereo, STEREO3, reference=1, cost_alpha=2), ValueError, "cost_alpha must be within [0, 1], got 2"),
+    ("stereo cost tau", _call(stereo.static_stereo, STEREO3, reference=1, cost_tau_i=0.0), ValueError, "cost_tau_i must be a positive finite number, got 0.0"),
+    ("stereo cost eps", _call(stereo.static_stereo, STEREO3, reference=1, cost_eps=-1e-4), ValueError, "cost_eps must be a positive finite number, got -0.0001"),
+    ("stereo cost median", _call(stereo.static_stereo, STEREO3, reference=1, cost_median_px=4), ValueError, "cost_median_px must be 0, 1, 3 or 5, got 4"),
+    ("stereo cost margin", _call(stereo.static_stereo, STEREO3, reference=1, min_cost_margin=-1), ValueError, "min_cost_margin must be a finite number >= 0, got -1"),
+    ("stereo edge step", _call(stereo.static_stereo, STEREO3, reference=1, edge_step_px=-1), ValueError, "edge_step_px must be a finite number >= 0, got -1"),
+    ("stereo disagreement", _call(stereo.static_stereo, STEREO3, reference=1, max_edge_disagreement_px=0), ValueError, "max_edge_disagreement_px must be a number > 0 (inf: no limit), got 0"),
+    ("stereo edge std nan", _call(stereo.static_stereo, STEREO3, reference=1, max_edge_std_px=float("nan")), ValueError, "max_edge_std_px must be a number > 0 (inf: no limit), got nan"),
+    ("stereo edge std str", _call(stereo.static_stereo, STEREO3, reference=1, max_edge_std_px="wide"), TypeError, "max_edge_std_px must be a number > 0 (inf: no limit), got 'wide'"),
+    ("stereo iterations", _call(stereo.static_stereo, STEREO3, reference=1, iterations_per_level=2.5), TypeError, "iterations_per_level must be an integer >= 1, got 2.5"),
+    ("stereo edge iterations", _call(stereo.static_stereo, STEREO3, reference=1, edge_iterations=-1), ValueError, "edge_iterations must be an integer >= 0, got -1"),
+    ("stereo schedule", _call(stereo.static_stereo, STEREO3, reference=1, view_schedule="yes"), TypeError, "view_schedule must be True or False, got 'yes'"),
+    ("stereo guided eps", _call(stereo.static_stereo, STEREO3, reference=1, guided_eps=-1.0), ValueError, "guided_eps must be a positive finite number, got -1.0"),
+    ("stereo polish radius", _call(stereo.static_stereo, STEREO3, reference=1, polish_radius=0), ValueError, "polish_radius must be an integer >= 1, got 0"),
+    ("stereo select window", _call(stereo.static_stereo, STEREO3, reference=1, select_window_px=0), ValueError, "select_window_px must be a positive finite number, got 0"),
+    ("stereo min_cos", _call(stereo.static_stereo, STEREO3, reference=1, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2"),
+    ("stereo corner ratio", _call(stereo.static_stereo, STEREO3, reference=1, max_corner_ratio=-0.1), ValueError, "max_corner_ratio must be within [0, 1], got -0.1"),
+    ("stereo levels", _call(stereo.static_stereo, STEREO3, reference=1, levels=99), ValueError, "levels must be >= 1 and leave at least 4 px at the coarsest level, got 99"),
     ("stereo nan pixel", _call(stereo.static_stereo, [TEX, TEX, np.full((32, 32), np.nan)], reference=1), ValueError, "views[2] contains 1024 non-finite"),
-    ("stereo depth focal", _call(lambda: stereo.static_stereo(VIEWS3, reference=1).depth(focal_px=0.0, baseline=1.0)), ValueError, "focal_px must be a positive finite number, got 0.0"),
-    ("stereo depth baseline", _call(lambda: stereo.static_stereo(VIEWS3, reference=1).depth(focal_px=1.0, baseline=0.0)), ValueError, "baseline must be a positive finite number, got 0.0"),
+    ("stereo depth focal", _call(lambda: stereo.static_stereo(STEREO3, reference=1).depth(focal_px=0.0, baseline=1.0)), ValueError, "focal_px must be a positive finite number, got 0.0"),
+    ("stereo depth baseline", _call(lambda: stereo.static_stereo(STEREO3, reference=1).depth(focal_px=1.0, baseline=0.0)), ValueError, "baseline must be a positive finite number, got 0.0"),
     # synthetic scenes
     ("synthetic size", _call(synthetic.paper_camera, image_size_px=0), ValueError, "image_size_px must be an integer >= 2, got 0"),
     ("synthetic views", _call(synthetic.paper_static_sequence, n_views=1), ValueError, "n_views must be an integer >= 2, got 1"),
@@ -193,6 +195,53 @@ def test_library_rejects_bad_input(fn, exc, fragment):
         fn()
     assert fragment in str(info.value)
     assert type(info.value) is exc  # the documented type itself, not a subclass
+
+
+#: Numbers given as text, bools or fractions where an integer is expected:
+#: refused with the whole message (float('2') and int(2.5) would accept them).
+NOT_NUMBERS = [
+    ("stereo sigma str", _call(nf.static_stereo, STEREO3, reference=1, sigma_px="2"), "sigma_px must be a finite number >= 0, got '2' (str, not a number)"),
+    ("stereo sigma bytes", _call(nf.static_stereo, STEREO3, reference=1, sigma_px=b"2"), "sigma_px must be a finite number >= 0, got b'2' (bytes, not a number)"),
+    ("stereo sigma bool", _call(nf.static_stereo, STEREO3, reference=1, sigma_px=True), "sigma_px must be a finite number >= 0, got True (bool, not a number)"),
+    ("stereo sigma 0-d str", _call(nf.static_stereo, STEREO3, reference=1, sigma_px=np.array("2")), "sigma_px must be a finite number >= 0, got array('2', dtype='<U1') (str, not a number)"),
+    ("stereo cost alpha numpy bool", _call(nf.static_stereo, STEREO3, reference=1, cost_alpha=np.True_), "cost_alpha must be a number within [0, 1], got np.True_ (bool, not a number)"),
+    ("stereo reach complex", _call(nf.static_stereo, STEREO3, reference=1, dense_reach_px=1j), "dense_reach_px must be a number >= 0 (inf: no limit), got 1j (complex, not a real number)"),
+    ("stereo iterations fraction", _call(nf.static_stereo, STEREO3, reference=1, iterations_per_level=2.5), "iterations_per_level must be an integer >= 1, got 2.5 (not a whole number)"),
+    ("stereo iterations integral float", _call(nf.static_stereo, STEREO3, reference=1, iterations_per_level=2.0), "iterations_per_level must be an integer >= 1, got 2.0 (float; give an int such as 2)"),
+    ("stereo rounds bool", _call(nf.static_stereo, STEREO3, reference=1, propagate_rounds=True), "propagate_rounds must be an integer >= 0, got True (bool, not a number)"),
+    ("stereo threads str", _call(nf.static_stereo, STEREO3, reference=1, threads="2"), "threads must be an integer >= 1, got '2' (str, not a number)"),
+    ("stereo reference float", _call(nf.static_stereo, STEREO3, reference=1.0), "reference must be an int view index, got 1.0 (float; give an int such as 1)"),
+    ("nf sigma str", _call(nf.normal_flow, VIEWS3, sigma_px="1.5"), "sigma_px must be a finite number >= 0, got '1.5' (str, not a number)"),
+    ("nf interval bool", _call(nf.normal_flow, VIEWS3, frame_interval=True), "frame_interval must be a positive finite number, got True (bool, not a number)"),
+    ("edges border float", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, border_px=np.float64(3.0)), "border_px must be an integer >= 0, got np.float64(3.0) (float; give an int such as 3)"),
+    ("edges gradient str", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, min_gradient="5"), "min_gradient must be a finite number >= 0, got '5' (str, not a number)"),
+    ("synthetic views fraction", _call(synthetic.paper_static_sequence, n_views=3.5), "n_views must be an integer >= 2, got 3.5 (not a whole number)"),
+    ("camera focal str", _call(nf.PinholeCamera, "100", 32, 32), "focal_px must be a positive finite number, got '100' (str, not a number)"),
+    ("motion str", _call(nf.RigidMotion, translation=["1", "0", "0"]), "translation must be 3 numbers, got ['1', '0', '0'] (str, not a number)"),
+    ("motion bool", _call(nf.RigidMotion, translation=[True, 0, 0]), "translation must be 3 numbers, got [True, 0, 0] (bool, not a number)"),
+]
+
+
+@pytest.mark.parametrize(("fn", "message"), [c[1:] for c in NOT_NUMBERS], ids=[c[0] for c in NOT_NUMBERS])
+def test_library_refuses_text_bools_and_fractions_as_numbers(fn, message):
+    with pytest.raises(TypeError) as info:
+        fn()
+    assert str(info.value) == message
+    assert type(info.value) is TypeError
+
+
+def test_numpy_scalars_and_0d_arrays_are_still_numbers():
+    """NumPy integer / floating scalars and 0-d numeric arrays pass where Python ints / floats do."""
+    views = STEREO3
+    options = {"reference": np.int64(1), "sigma_px": np.float32(1.0), "cost_alpha": np.array(0.5), "iterations_per_level": np.int32(2), "threads": np.array(1)}
+    got = nf.static_stereo(views, **options)
+    want = nf.static_stereo(views, reference=1, sigma_px=1.0, cost_alpha=0.5, iterations_per_level=2, threads=1)
+    assert np.count_nonzero(np.isfinite(want.disparity)) > 100
+    np.testing.assert_array_equal(got.disparity, want.disparity)
+    flow = nf.normal_flow(views, sigma_px=np.float64(1.0), frame_interval=np.int64(2))
+    want_flow = nf.normal_flow(views, sigma_px=1.0, frame_interval=2.0)
+    assert np.any(want_flow.grad_t != 0)
+    np.testing.assert_array_equal(flow.grad_t, want_flow.grad_t)
 
 
 def test_integer_images_do_not_overflow():

@@ -206,6 +206,62 @@ def test_stereo_direction_must_be_axis_for_stereo_command():
         stereo_options_from_rig(rig_from_dict({"camera": BASE["camera"]}))
 
 
+@pytest.mark.parametrize(
+    ("direction", "shown"),
+    [([0, 0, 1], "[0, 0, 1]"), ([0.0, 0.0, -3.0], "[0, 0, -1]"), ([1, 1, 0], "[0.707107, 0.707107, 0]")],
+)
+def test_stereo_direction_message_names_the_file_and_plain_numbers(tmp_path, direction, shown):
+    path = tmp_path / "tilted.toml"
+    path.write_text(f"[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[stereo]\nbaseline = 1\ndirection = {direction}\n")
+    rig = load_rig(path)
+    with pytest.raises(RigError) as info:
+        stereo_options_from_rig(rig)
+    assert str(info.value) == (
+        f"rig '{path}': stereo.direction = {shown}: expected [1, 0, 0] or [0, 1, 0] for nfdepth stereo "
+        "(order the views so the camera moves toward +x or +y)"
+    )
+    assert "np." not in str(info.value)
+
+
+def test_stereo_direction_message_without_a_file():
+    d = copy.deepcopy(BASE)
+    d["stereo"] = {"baseline": 1.0, "direction": [0, 0, 1]}
+    with pytest.raises(RigError, match=r"^stereo\.direction = \[0, 0, 1\]: expected \[1, 0, 0\] or \[0, 1, 0\]"):
+        stereo_options_from_rig(rig_from_dict(d))
+
+
+@pytest.mark.parametrize(
+    ("stereo", "counts", "message"),
+    [
+        ("positions = [0, 1]", {"n_views": 3}, "stereo.positions has 2 entries, expected one per view (3)"),
+        ("positions = [0, 1, 2, 4]", {"n_views": 3}, "stereo.positions has 4 entries, expected one per view (3)"),
+        (
+            "positions = [0, 1, 2]\ncolumn_positions = [0, 1, 2]",
+            {"n_views": 3, "n_column_views": 2},
+            "stereo.column_positions has 3 entries, expected one per column view (2)",
+        ),
+    ],
+)
+def test_stereo_positions_count_names_the_file_and_key(tmp_path, stereo, counts, message):
+    path = tmp_path / "x.toml"
+    path.write_text(f"[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[stereo]\nbaseline = 1\n{stereo}\n")
+    rig = load_rig(path)
+    with pytest.raises(RigError) as info:
+        stereo_options_from_rig(rig, **counts)
+    assert str(info.value) == f"rig '{path}': {message}"
+    # without the numbers of views (the default) the counts are not checked
+    assert stereo_options_from_rig(rig)["positions"] == [float(v) for v in tomllib.loads(path.read_text())["stereo"]["positions"]]
+
+
+def test_stereo_positions_count_that_matches_passes():
+    d = copy.deepcopy(BASE)
+    d["stereo"].update(positions=[0, 1, 2.5], column_positions=[0, 2])
+    opts = stereo_options_from_rig(rig_from_dict(d), n_views=3, n_column_views=2)
+    assert opts["positions"] == [0.0, 1.0, 2.5] and opts["column_positions"] == [0.0, 2.0]
+    with pytest.raises(RigError, match=r"^stereo\.positions has 3 entries, expected one per view \(4\)$"):
+        stereo_options_from_rig(rig_from_dict(d), n_views=4)
+
+
 def test_load_rig_file_errors(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such file"):
         load_rig(tmp_path / "missing.toml")

@@ -66,11 +66,34 @@ def check_frame_size(name: str, shape) -> None:
         raise ImageTooLargeError(msg)
 
 
+def _not_a_number(value) -> str | None:
+    """Why ``value`` is no number although ``float(value)`` may accept it, or None.
+
+    Strings and bytes (``float('2')`` parses them), bools (``float(True)`` is
+    1.0) and complex numbers are refused, also as NumPy scalars or 0-d arrays.
+    """
+    item = value
+    if isinstance(item, (np.ndarray, np.generic)) and np.ndim(item) == 0:
+        item = item.item()
+    if isinstance(item, bool):
+        return "bool, not a number"
+    if isinstance(item, (str, bytes, bytearray)):
+        return f"{type(item).__name__}, not a number"
+    if isinstance(item, complex):
+        return "complex, not a real number"
+    return None
+
+
 def _check_number(name: str, value, what: str, accept, *, refused: str | None = None) -> float:
     """Return ``value`` as float; TypeError if it is not a number, ValueError if ``accept(number)`` is false.
 
-    Both messages read "``name`` must be ``what``, got ``value``" (``refused`` replaces ``what`` in the second).
+    Both messages read "``name`` must be ``what``, got ``value``" (``refused`` replaces ``what`` in the second);
+    a str, bytes, bool or complex ``value`` adds why it is refused, e.g. "got '2' (str, not a number)".
     """
+    why = _not_a_number(value)
+    if why is not None:
+        msg = f"{name} must be {what}, got {value!r} ({why})"
+        raise TypeError(msg)
     try:
         number = float(value)
     except (TypeError, ValueError):
@@ -120,26 +143,45 @@ def check_bool(name: str, value) -> bool:
     return bool(value)
 
 
-def check_int(name: str, value, minimum: int) -> int:
-    """Return ``value`` as int, or raise if it is not an integer >= ``minimum`` (bools refused)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        msg = f"{name} must be an integer >= {minimum}, got {value!r}"
+def _as_int(name: str, value, what: str) -> int:
+    """``value`` as int (Python or NumPy integer, or a 0-d integer array); TypeError naming ``what`` otherwise.
+
+    Floats are refused even when integral (``2.0``): an integer option given a
+    float is more likely a mistake than a convenience.
+    """
+    why = _not_a_number(value)
+    item = value.item() if isinstance(value, np.ndarray) and value.ndim == 0 else value
+    if why is None and isinstance(item, (float, np.floating)):
+        why = f"float; give an int such as {int(item)}" if np.isfinite(item) and float(item).is_integer() else "not a whole number"
+    if why is not None:
+        msg = f"{name} must be {what}, got {value!r} ({why})"
         raise TypeError(msg)
-    if value < minimum:
+    if not isinstance(item, (int, np.integer)):
+        msg = f"{name} must be {what}, got {value!r}"
+        raise TypeError(msg)
+    return int(item)
+
+
+def check_int(name: str, value, minimum: int) -> int:
+    """Return ``value`` as int, or raise if it is not an integer >= ``minimum``.
+
+    TypeError for a bool, str, float (also ``2.0``) or other non-integer;
+    ValueError below ``minimum``.
+    """
+    number = _as_int(name, value, f"an integer >= {minimum}")
+    if number < minimum:
         msg = f"{name} must be an integer >= {minimum}, got {value!r}"
         raise ValueError(msg)
-    return int(value)
+    return number
 
 
 def check_view_index(name: str, value, count: int) -> int:
-    """Return ``value`` as int, or raise if it is not the index of one of ``count`` views (bools refused)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        msg = f"{name} must be an int view index, got {value!r}"
-        raise TypeError(msg)
-    if not 0 <= int(value) < count:
+    """Return ``value`` as int, or raise if it is not the index of one of ``count`` views (bools, floats refused)."""
+    index = _as_int(name, value, "an int view index")
+    if not 0 <= index < count:
         msg = f"{name} must be a view index in 0..{count - 1}, got {value!r}"
         raise ValueError(msg)
-    return int(value)
+    return index
 
 
 def check_fraction(name: str, value) -> float:
@@ -149,6 +191,13 @@ def check_fraction(name: str, value) -> float:
 
 def as_vector3(name: str, value) -> np.ndarray:
     """Return ``value`` as a finite float64 vector of length 3."""
+    items = list(value) if isinstance(value, (list, tuple)) else [value]
+    why = next((w for w in map(_not_a_number, items) if w is not None), None)
+    if why is None and isinstance(value, np.ndarray) and value.dtype.kind in "bUSc":
+        why = f"array of {value.dtype}, not numbers"
+    if why is not None:
+        msg = f"{name} must be 3 numbers, got {value!r} ({why})"
+        raise TypeError(msg)
     try:
         vec = np.asarray(value, dtype=float)
     except (TypeError, ValueError):

@@ -80,6 +80,10 @@ class RigError(ValueError):
 
 
 def _show(value: Any) -> str:
+    if isinstance(value, np.ndarray):  # computed vectors (a unit direction): plain numbers, [0, 0, 1]
+        return "[" + ", ".join(f"{float(v) + 0.0:g}" for v in value.ravel()) + "]"
+    if isinstance(value, np.generic):
+        return _show(value.item())
     if isinstance(value, str):
         return repr(value)
     if isinstance(value, float) and value.is_integer():
@@ -674,24 +678,34 @@ def rig_to_toml(rig: Rig) -> str:
 # ----------------------------------------------------------------- adapters
 
 
-def stereo_options_from_rig(rig: Rig) -> dict:
+def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_views: int | None = None) -> dict:
     """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
 
     Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
     column_positions=list|None, disparity_range_px=list|None)``.
     :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
     a ``direction`` must be one of those.
+
+    ``n_views`` / ``n_column_views``, when given, are the numbers of views of
+    the row / column the options are for: ``stereo.positions`` /
+    ``stereo.column_positions`` must then hold one entry per view.
+
+    Raises :class:`RigError` (starting ``rig 'FILE':`` when the rig was read
+    from a file) naming the key, its value and what was expected.
     """
     s = rig._need("stereo")
+    where = f"rig '{rig.source}': " if rig.source is not None else ""
     axis = s.axis
     if axis is None:
         for name, vec in _AXES.items():
             if np.allclose(s.direction, vec, atol=1e-9):
                 axis = name
         if axis is None:
-            raise _fail(
-                "stereo.direction", list(s.direction), '[1, 0, 0] or [0, 1, 0] for nfdepth stereo (order the views so the camera moves toward +x or +y)'
-            )
+            expected = "[1, 0, 0] or [0, 1, 0] for nfdepth stereo (order the views so the camera moves toward +x or +y)"
+            raise RigError(f"{where}{_fail('stereo.direction', s.direction, expected)}")
+    for key, values, count, views in (("positions", s.positions, n_views, "view"), ("column_positions", s.column_positions, n_column_views, "column view")):
+        if values is not None and count is not None and len(values) != count:
+            raise RigError(f"{where}stereo.{key} has {len(values)} entries, expected one per {views} ({count})")
     return {
         "focal_px": float(rig.camera.focal_px),
         "baseline": float(s.baseline),

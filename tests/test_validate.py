@@ -1,0 +1,142 @@
+"""The shared numeric validators: what counts as a number, an integer, a 3-vector.
+
+``float('2')`` parses text and ``float(True)`` is 1.0, so the validators
+refuse str / bytes / bool / complex before converting; integer options refuse
+floats, integral ones included. NumPy scalars and 0-d numeric arrays pass.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nfdepth._validate import (
+    as_vector3,
+    check_finite,
+    check_fraction,
+    check_int,
+    check_nonnegative_finite,
+    check_nonzero_finite,
+    check_positive_finite,
+    check_positive_or_inf,
+    check_reach,
+    check_view_index,
+)
+
+NUMBER_CHECKS = [
+    (check_finite, "a finite number"),
+    (check_positive_finite, "a positive finite number"),
+    (check_nonnegative_finite, "a finite number >= 0"),
+    (check_nonzero_finite, "a non-zero finite number"),
+    (check_reach, "a number >= 0 (inf: no limit)"),
+    (check_positive_or_inf, "a number > 0 (inf: no limit)"),
+    (check_fraction, "a number within [0, 1]"),
+]
+
+
+@pytest.mark.parametrize(("check", "what"), NUMBER_CHECKS, ids=[c[0].__name__ for c in NUMBER_CHECKS])
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        ("0.5", "str, not a number"),
+        (b"0.5", "bytes, not a number"),
+        (np.str_("0.5"), "str, not a number"),
+        (np.array("0.5"), "str, not a number"),
+        (True, "bool, not a number"),
+        (np.False_, "bool, not a number"),
+        (np.array(True), "bool, not a number"),
+        (0.5 + 0j, "complex, not a real number"),
+        (np.complex64(0.5), "complex, not a real number"),
+    ],
+)
+def test_numbers_refuse_text_bools_and_complex(check, what, value, why):
+    with pytest.raises(TypeError) as info:
+        check("speed_px", value)
+    assert str(info.value) == f"speed_px must be {what}, got {value!r} ({why})"
+
+
+@pytest.mark.parametrize(("check", "what"), NUMBER_CHECKS, ids=[c[0].__name__ for c in NUMBER_CHECKS])
+@pytest.mark.parametrize("value", [0.5, np.float32(0.5), np.float64(0.5), np.array(0.5), np.array(0.5, dtype=np.float16)])
+def test_numbers_accept_floats_numpy_scalars_and_0d_arrays(check, what, value):
+    got = check("speed_px", value)
+    assert type(got) is float and got == 0.5
+
+
+@pytest.mark.parametrize("value", [1, np.int8(1), np.uint64(1), np.array(1)])
+def test_numbers_accept_integers(value):
+    assert check_positive_finite("speed_px", value) == 1.0
+    assert check_fraction("speed_px", value) == 1.0
+
+
+@pytest.mark.parametrize(("value", "why"), [(None, None), ([1.0], None), ("abc", "str, not a number")])
+def test_number_message_for_other_types(value, why):
+    with pytest.raises(TypeError) as info:
+        check_positive_finite("speed_px", value)
+    tail = f" ({why})" if why else ""
+    assert str(info.value) == f"speed_px must be a positive finite number, got {value!r}{tail}"
+
+
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        (2.5, "not a whole number"),
+        (np.float32(2.5), "not a whole number"),
+        (float("nan"), "not a whole number"),
+        (float("inf"), "not a whole number"),
+        (2.0, "float; give an int such as 2"),
+        (np.float64(3.0), "float; give an int such as 3"),
+        (np.array(4.0), "float; give an int such as 4"),
+        ("2", "str, not a number"),
+        (b"2", "bytes, not a number"),
+        (True, "bool, not a number"),
+        (np.True_, "bool, not a number"),
+        (2 + 0j, "complex, not a real number"),
+        (None, None),
+        ([2], None),
+    ],
+)
+def test_integers_refuse_floats_text_and_bools(value, why):
+    tail = f" ({why})" if why else ""
+    with pytest.raises(TypeError) as info:
+        check_int("levels", value, 1)
+    assert str(info.value) == f"levels must be an integer >= 1, got {value!r}{tail}"
+    with pytest.raises(TypeError) as info:
+        check_view_index("reference", value, 5)
+    assert str(info.value) == f"reference must be an int view index, got {value!r}{tail}"
+
+
+@pytest.mark.parametrize("value", [3, np.int8(3), np.uint16(3), np.int64(3), np.array(3)])
+def test_integers_accept_python_and_numpy_integers(value):
+    got = check_int("levels", value, 1)
+    assert type(got) is int and got == 3
+    got = check_view_index("reference", value, 5)
+    assert type(got) is int and got == 3
+
+
+def test_integer_range_errors_stay_value_errors():
+    with pytest.raises(ValueError, match=r"^levels must be an integer >= 1, got 0$"):
+        check_int("levels", 0, 1)
+    with pytest.raises(ValueError, match=r"^reference must be a view index in 0\.\.2, got np\.int64\(3\)$"):
+        check_view_index("reference", np.int64(3), 3)
+
+
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        (["1", "0", "0"], "str, not a number"),
+        (("1", 0, 0), "str, not a number"),
+        ([0, False, 1], "bool, not a number"),
+        (np.array([True, False, True]), "array of bool, not numbers"),
+        (np.array(["1", "0", "0"]), "array of <U1, not numbers"),
+        (np.array([1j, 0, 0]), "array of complex128, not numbers"),
+    ],
+)
+def test_vectors_refuse_text_and_bools(value, why):
+    with pytest.raises(TypeError) as info:
+        as_vector3("velocity", value)
+    assert str(info.value) == f"velocity must be 3 numbers, got {value!r} ({why})"
+
+
+@pytest.mark.parametrize("value", [[1, 0, 0], (1.0, 0.0, 0.0), np.array([1, 0, 0], dtype=np.int32), [np.float32(1), np.int64(0), 0.0]])
+def test_vectors_accept_numbers(value):
+    np.testing.assert_array_equal(as_vector3("velocity", value), [1.0, 0.0, 0.0])
