@@ -381,8 +381,9 @@ def test_a_winner_at_an_end_of_the_automatic_range_is_uncertain(monkeypatch):
     assert r.valid.sum() > 500 and np.all(r.disparity[r.valid] == hi)
 
 
-def test_a_given_range_keeps_the_winners_at_its_ends():
-    """A range given by the caller says where the scene is: a plane at its lower end is kept."""
+def test_a_plane_at_the_end_of_a_given_range_is_measured():
+    """A plane exactly at the lower end of a given range is measured, not cut off: the range
+    is searched 1 px beyond its ends, and only the outer end counts as outside."""
     r = static_stereo(_plane((96, 128), 2.0), reference=1, disparity_range_px=(2.0, 8.0))
     inner = r.disparity[16:-16, 16:-16]
     assert np.isfinite(inner).mean() > 0.95
@@ -431,3 +432,39 @@ def test_motorcycle_left_border_no_longer_matches_at_the_range_end():
     assert np.count_nonzero(got & outside) < 60
     bad = np.abs(r.disparity[got] - truth[got]) > 1.0
     assert bad.mean() < 0.047 and got.sum() > 0.80 * has.sum()
+
+
+def test_a_given_range_is_searched_one_px_beyond_its_ends():
+    """A plane at 8 px: a given range that ends 1.5 px short of it (0-6.5) used to report it at
+    6.5 px; the outer end of the extra px (7.5) now catches it as outside (UNCERTAIN), with the
+    lost-match warning. A range ending 0.4 px short (0-7.6) still measures it."""
+    views = _plane((96, 128), 8.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        short = static_stereo(views, reference=1, disparity_range_px=(0.0, 6.5))
+    assert short.search_range_px == (0.0, 6.5)
+    assert not np.any(np.abs(short.disparity[short.valid] - 8.0) > 1.0)
+    assert short.valid.mean() < 0.05
+    assert any("no unique match between disparities 0 and 6.5 px" in str(w.message) for w in caught)
+    near = static_stereo(views, reference=1, disparity_range_px=(0.0, 7.6))
+    inner = near.disparity[8:-8, 16:-16]
+    assert np.isfinite(inner).mean() > 0.95 and np.nanmedian(np.abs(inner - 8.0)) < 0.05
+
+
+def test_a_given_range_is_checked_against_the_candidate_step_and_the_image():
+    views = _plane((96, 400), 4.0)
+    with pytest.raises(ValueError, match=r"^disparity_range_px = \(0, 0\.1\) is narrower than two candidate steps \(1 px per unit of position; cost_step_px = 0\.5 px\)"):
+        static_stereo(views, reference=1, disparity_range_px=(0, 0.1))
+    with pytest.raises(ValueError, match=r"disparity_range_px = \(500, 900\) lies beyond the image: a disparity above 399 px per unit of position moves every pixel out of every view"):
+        static_stereo(views, reference=1, disparity_range_px=(500, 900))
+    # positions in tenths: the same checks in that unit
+    with pytest.raises(ValueError, match=r"narrower than two candidate steps \(10 px per unit of position"):
+        static_stereo(views, reference=1, positions=(0, 0.1, 0.2), disparity_range_px=(0, 5))
+    # clipped to the image, and searched in coarser steps: said so (and, at 1.6 px steps on this
+    # smooth texture, most pixels have no unique match)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = static_stereo(views, reference=1, disparity_range_px=(-1000, 1000))
+    assert r.search_range_px == (-399.0, 399.0)
+    coarse = r"the search range -399\.\.399 px per unit of position holds more than 512 candidates at cost_step_px = 0\.5 px: searched in 1\.5\d* px steps"
+    assert any(re.search(coarse, str(w.message)) for w in caught), [str(w.message) for w in caught]
