@@ -11,6 +11,7 @@ import pytest
 import tifffile
 
 from nfdepth.io import (
+    ImageRangeError,
     ImageReadError,
     OutputExistsError,
     OutputWriteError,
@@ -19,6 +20,7 @@ from nfdepth.io import (
     read_image,
     read_pfm,
     to_grey,
+    to_rgb8,
     write_array,
     write_colormap_png,
     write_pfm,
@@ -190,6 +192,22 @@ def test_atomic_write_full_disk_leaves_nothing(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["z.bin"] and (tmp_path / "z.bin").read_bytes() == b"old"
 
 
+@pytest.mark.skipif(os.name != "posix", reason="POSIX file modes")
+def test_figure_file_mode_follows_umask(tmp_path):
+    from nfdepth import plot
+
+    mask = os.umask(0o027)
+    try:
+        fig = plot.colormap_panel(_ramp(), title="ramp", unit="px")
+        png = plot.save_figure(fig, tmp_path / "sub" / "f.png")
+        arr = write_array(tmp_path / "a.npy", _ramp())
+    finally:
+        os.umask(mask)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert png.stat().st_mode & 0o777 == arr.stat().st_mode & 0o777 == 0o640
+    assert _no_temp_files(tmp_path / "sub")
+
+
 def test_atomic_write_file_mode_follows_umask(tmp_path):
     p = atomic_write(tmp_path / "m.bin", lambda fh: fh.write(b"abc"))
     mask = os.umask(0o022)
@@ -323,6 +341,26 @@ def test_garbage_tiff_and_npy(tmp_path):
             read_image(p)
 
 
+def test_float64_beyond_float32_is_named_not_called_non_finite(tmp_path):
+    big = np.full((4, 5), 1.0)
+    big[1, 2] = 1e300
+    big[2, 3] = -1e40
+    big[0, 0] = np.nan  # a NaN in the file is not an overflow
+    np.save(tmp_path / "big.npy", big)
+    msg = re.escape(f"cannot read image '{tmp_path / 'big.npy'}': 2 pixel(s) beyond the float32 range (max |value| 1e+300, float32 reaches 3.4e+38)")
+    with pytest.raises(ImageRangeError, match=msg) as info:
+        read_image(tmp_path / "big.npy")
+    assert isinstance(info.value, ImageReadError)
+    np.save(tmp_path / "rgb.npy", np.stack([big] * 3, axis=-1))
+    with pytest.raises(ImageRangeError, match=": 2 pixel"):
+        read_image(tmp_path / "rgb.npy")
+    # float64 keeps them; dtype=None keeps the stored array; in range float64 is only narrowed
+    assert read_image(tmp_path / "big.npy", dtype=np.float64)[1, 2] == 1e300
+    assert read_image(tmp_path / "big.npy", dtype=None).dtype == np.float64
+    np.save(tmp_path / "ok.npy", np.full((4, 5), 3e38))
+    assert read_image(tmp_path / "ok.npy").dtype == np.float32
+
+
 def test_read_image_dtype_check(tmp_path):
     p = write_array(tmp_path / "a.npy", _ramp())
     with pytest.raises(ValueError, match="dtype=int32 is not supported"):
@@ -418,3 +456,24 @@ def test_depth_to_points_follows_conventions():
         depth_to_points(z, focal_px=0)
     with pytest.raises(ValueError, match=r"image must have shape \(3, 5\)"):
         depth_to_points(z, focal_px=1, image=np.zeros((2, 2)))
+
+
+def test_to_rgb8_scales_every_bit_depth_to_8_bits():
+    grey16 = np.array([[0, 1000], [30000, 60000]], dtype=np.uint16)
+    out = to_rgb8(grey16)
+    assert out.shape == (2, 2, 3) and out.dtype == np.uint8
+    np.testing.assert_array_equal(out[..., 0], np.rint(grey16 * 255.0 / 60000))
+    np.testing.assert_array_equal(out[..., 0], out[..., 2])
+    rgba8 = np.arange(2 * 2 * 4, dtype=np.uint8).reshape(2, 2, 4)
+    np.testing.assert_array_equal(to_rgb8(rgba8), rgba8[..., :3])  # 8-bit kept, alpha dropped
+    rgba16 = np.zeros((1, 2, 4), np.uint16)
+    rgba16[..., 3] = 65535  # alpha does not set the scale
+    rgba16[0, 1, :3] = (100, 300, 400)
+    np.testing.assert_array_equal(to_rgb8(rgba16)[0, 1], [64, 191, 255])
+    floats = np.array([[0.5, np.nan], [-1.0, np.inf]])  # below 1: scaled as 0..1
+    np.testing.assert_array_equal(to_rgb8(floats)[..., 0], [[128, 0], [0, 255]])
+    np.testing.assert_array_equal(to_rgb8(np.zeros((2, 2, 2)))[..., 1], 0)  # grey + alpha
+    with pytest.raises(ValueError, match="shape"):
+        to_rgb8(np.zeros((2, 2, 5)))
+    with pytest.raises(TypeError, match="dtype"):
+        to_rgb8(np.array([["a"]]))

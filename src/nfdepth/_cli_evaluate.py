@@ -59,6 +59,18 @@ def _check_json_path(path: str, CLIError) -> Path:
     return out
 
 
+def _check_downsample(factor: int, scene, CLIError) -> None:
+    """Refuse a ``--downsample`` factor that leaves less than 2x2 pixels of ``scene``."""
+    h, w = scene.shape
+    largest = min(h, w) // 2
+    if factor > largest:
+        raise CLIError(
+            f"--downsample {factor} is too large for {scene.name} ({w}x{h} px): expected an integer from 1 to {largest}"
+            " (the downsampled views need at least 2x2 px)",
+            EXIT_USAGE,
+        )
+
+
 def _fmt_table(res) -> str:
     def pct(x, digits=1):
         return "     -" if x is None or x != x else f"{100 * x:5.{digits}f}%"
@@ -103,9 +115,13 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)
     select_views(3, 1, views)
     root, names = resolve_dataset(args.dataset, args.data)
+    if args.downsample > 1 and len(names) > 1:  # before any output: the factor must fit every scene (loading is < 1 s)
+        for name in names:
+            _check_downsample(args.downsample, datasets.load_scene(name, root), CLIError)
     results = []
     for name in names:
         scene = datasets.load_scene(name, root)
+        _check_downsample(args.downsample, scene, CLIError)
         res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None)
         print(_fmt_table(res), flush=True)
         if maps is not None:

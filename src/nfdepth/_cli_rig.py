@@ -38,19 +38,21 @@ def figure_std_path(path) -> Path:
     return path.with_name(f"{path.stem}_std{path.suffix}")
 
 
-def figure_outputs(args, *, with_std: bool) -> dict:
+def figure_outputs(args, *, with_std: bool, inputs=()) -> dict:
     """Validate ``--figure`` (and, ``with_std``, its ``_std`` sibling) before any work.
 
     Shared by the commands that draw figures (``args.figure``, ``args.force``);
-    returns ``{"figure": Path[, "figure_std": Path]}`` or ``{}``.
+    neither may be one of ``inputs``. Returns ``{"figure": Path[, "figure_std": Path]}`` or ``{}``.
     """
     from .cli import _check_output
 
     if not getattr(args, "figure", None):
         return {}
-    outs = {"figure": _check_output(args.figure, force=args.force, exts=(".png",), what="--figure")}
+    outs = {"figure": _check_output(args.figure, force=args.force, exts=(".png",), what="--figure", inputs=inputs)}
     if with_std:
-        outs["figure_std"] = _check_output(str(figure_std_path(args.figure)), force=args.force, exts=(".png",), what="--figure's std figure")
+        outs["figure_std"] = _check_output(
+            str(figure_std_path(args.figure)), force=args.force, exts=(".png",), what="--figure's std figure", inputs=inputs
+        )
     return outs
 
 
@@ -85,21 +87,44 @@ def _check_sigma(args, CLIError) -> dict:
 def _outputs(args, CLIError):
     from .cli import _check_output
 
-    outs = {"out": _check_output(args.out, force=args.force)}
+    inputs = [*args.images, args.rig]
+    outs = {"out": _check_output(args.out, force=args.force, inputs=inputs)}
     if args.uncertainty:
-        outs["uncertainty"] = _check_output(args.uncertainty, force=args.force, what="--uncertainty")
+        outs["uncertainty"] = _check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs)
     if args.preview:
-        outs["preview"] = _check_output(args.preview, force=args.force, exts=(".png",), what="--preview")
+        outs["preview"] = _check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs)
     if args.ply:
-        outs["ply"] = _check_output(args.ply, force=args.force, exts=(".ply",), what="--ply")
+        outs["ply"] = _check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs)
     if args.csv:
-        outs["csv"] = _check_output(args.csv, force=args.force, exts=(".csv",), what="--csv")
-    outs.update(figure_outputs(args, with_std=bool(args.uncertainty)))
+        outs["csv"] = _check_output(args.csv, force=args.force, exts=(".csv",), what="--csv", inputs=inputs)
+    outs.update(figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs))
     return _distinct(outs, CLIError)
 
 
+#: The option that names each output of :func:`_outputs` and :func:`figure_outputs`.
+_OUTPUT_OPTIONS = {"out": "--out", "figure": "--figure", "figure_std": "--figure's std figure"}
+
+
+def _check_not_inputs(outs: dict, sources, extra=()) -> None:
+    """Refuse outputs that are one of the inputs: the ``sources`` (FrameSource) with their frames, and ``extra`` paths."""
+    from .cli import _check_not_input
+
+    inputs = [*extra]
+    for source in sources:
+        inputs.extend(source.paths or ())
+    for key, out in outs.items():
+        _check_not_input(out, inputs, _OUTPUT_OPTIONS.get(key, f"--{key}"))
+
+
 def _cmd_dynamic(args) -> int:
-    from .io import atomic_write, read_image, write_array, write_colormap_png, write_ply
+    from .io import (
+        atomic_write,
+        read_image,
+        to_rgb8,
+        write_array,
+        write_colormap_png,
+        write_ply,
+    )
     from .rig import dynamic_stereo_from_rig, edge_depth_maps, load_rig
 
     CLIError = _CLIError
@@ -130,12 +155,7 @@ def _cmd_dynamic(args) -> int:
     write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=args.unit)
     ok = result.valid
     if "ply" in outs:
-        grey = read_image(args.images[2], grey=False, dtype=None)
-        img = grey if grey.ndim == 3 else np.repeat(grey[..., None], 3, axis=2)
-        img = img[..., :3]
-        if img.dtype != np.uint8:
-            scale = 255.0 / max(float(np.nanmax(img)), 1.0)  # 16-bit or float input: stretch to 8 bits
-            img = np.clip(np.rint(img.astype(float) * scale), 0, 255).astype(np.uint8)
+        img = to_rgb8(read_image(args.images[2], grey=False, dtype=None))  # 16-bit or float input: stretched to 8 bits
         ii = np.floor(result.rows[ok]).astype(int)
         jj = np.floor(result.cols[ok]).astype(int)
         write_ply(outs["ply"], result.points[ok].astype(np.float32), colors=img[ii, jj], force=args.force)
@@ -153,7 +173,12 @@ def _cmd_dynamic(args) -> int:
 def _cmd_dynamic_videos(args) -> int:
     """``nfdepth dynamic --moving-video M --reference-video R``: depth at each crossing instant."""
     from .rig import check_crossings, load_rig
-    from .video import dynamic_stereo_from_videos, read_video, write_crossings_npz, write_video_frame
+    from .video import (
+        dynamic_stereo_from_videos,
+        read_video,
+        write_crossings_npz,
+        write_video_frame,
+    )
 
     CLIError = _CLIError
     if args.moving_video is None or args.reference_video is None:
@@ -179,6 +204,7 @@ def _cmd_dynamic_videos(args) -> int:
     if crossings is None and rig.motion.crossings is None:
         raise CLIError(f"rig '{args.rig}' has no motion.crossings: give --crossings K [K ...] (frames at which the cameras coincide)")
     moving, reference = read_video(args.moving_video), read_video(args.reference_video)
+    _check_not_inputs(outs, (moving, reference), (args.moving_video, args.reference_video, args.rig))
     if moving.paths is not None and reference.paths is not None and len(moving) != len(reference):
         raise CLIError(
             f"the videos must be synchronised frame by frame: '{args.moving_video}' has {len(moving)} frames,"
@@ -293,6 +319,7 @@ def _cmd_video(args) -> int:
     elif rig.video is None:
         raise CLIError(f"rig '{args.rig}' has no [video] section: give video.velocity, video.positions or video.poses there, or --poses CSV")
     source = read_video(args.source)
+    _check_not_inputs(figures, (source,), (args.source, args.rig, args.poses))
     total = len(source)
     if source.paths is not None and total < 3:
         raise CLIError(f"video needs at least 3 frames, '{args.source}' has {total}")

@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import signal
 import sys
 import threading
@@ -86,6 +87,8 @@ class _Parser(argparse.ArgumentParser):
 
 def _classify(exc: BaseException) -> int:
     name = type(exc).__name__
+    if name == "ImageRangeError":  # the file was read; its values do not fit float32
+        return EXIT_USAGE
     if name in ("ImageReadError",):
         return EXIT_READ
     if name in ("OutputExistsError", "OutputWriteError"):
@@ -167,6 +170,8 @@ def _write_paper_figures(out_dir: Path, res) -> list[Path]:
 def _cmd_reproduce(args) -> int:
     from .experiments import EXPERIMENTS, run_paper_experiment
 
+    if args.seed < 0:
+        raise CLIError(f"--seed must be an integer >= 0 (the noise generator's seed), got {args.seed}")
     if args.noise < 0 or not np.isfinite(args.noise):
         raise CLIError(f"--noise must be a finite number >= 0, got {args.noise}")
     if args.json:
@@ -276,13 +281,40 @@ def _cmd_demo(args) -> int:
 _ARRAY_EXTS = (".pfm", ".tif", ".tiff", ".npy")
 
 
-def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--out") -> Path:
-    """Validate an output path before any work is done (no partial results)."""
+def _path_keys(path) -> set:
+    """What identifies ``path`` on disk: its resolved name and, if it exists, its (device, inode)."""
+    keys: set = {os.path.realpath(path)}
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return keys
+    if st.st_ino:  # 0 where the file system has no inode numbers
+        keys.add((st.st_dev, st.st_ino))
+    return keys
+
+
+def _check_not_input(out, inputs, what: str = "--out") -> None:
+    """Refuse, even with ``--force``, an output path that is one of the command's inputs (the same file or folder)."""
+    if not inputs:
+        return
+    mine = _path_keys(out)
+    for inp in inputs:
+        if inp is not None and mine & _path_keys(inp):
+            raise CLIError(
+                f"{what} '{out}' is the input '{inp}'; expected an output path that is not one of the inputs (--force never overwrites an input)",
+                EXIT_USAGE,
+            )
+
+
+def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--out", inputs=()) -> Path:
+    """Validate an output path before any work is done (no partial results); never one of ``inputs``."""
     out = Path(path)
     if exts and out.suffix.lower() not in exts:
-        raise CLIError(f"{what} '{out}' must end in one of {', '.join(exts)}", EXIT_USAGE)
+        folder = "; it is a directory, expected a file path" if out.is_dir() else ""
+        raise CLIError(f"{what} '{out}' must end in one of {', '.join(exts)}{folder}", EXIT_USAGE)
     if out.is_dir():
         raise CLIError(f"{what} '{out}' is a directory; expected a file path", EXIT_WRITE)
+    _check_not_input(out, inputs, what)
     if out.exists() and not force:
         raise CLIError(f"{what} '{out}' exists; use --force to overwrite it", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
@@ -301,7 +333,7 @@ def _positive(name: str, value):
 
 
 def _cmd_stereo(args) -> int:
-    from .io import depth_to_points, read_image, write_array, write_colormap_png, write_ply
+    from .io import depth_to_points, read_image, to_rgb8, write_array, write_colormap_png, write_ply
     from .stereo import static_stereo
 
     if len(args.views) < 2:
@@ -311,7 +343,7 @@ def _cmd_stereo(args) -> int:
         from .rig import load_rig, stereo_options_from_rig
 
         rig = load_rig(args.rig)
-        opts = stereo_options_from_rig(rig)
+        opts = stereo_options_from_rig(rig, n_views=len(args.views), n_column_views=len(args.column) if args.column else None)
         for key in ("focal_px", "baseline", "axis", "positions", "column_positions"):
             if key == "column_positions" and not args.column:
                 continue  # the rig's column is not in use
@@ -356,20 +388,21 @@ def _cmd_stereo(args) -> int:
         lo, hi = args.disparity_range
         if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
             raise CLIError(f"--disparity-range must be two finite numbers MIN < MAX, got {lo:g} {hi:g}")
-    outputs = [_check_output(args.out, force=args.force)]
+    inputs = [*args.views, *column, args.rig]
+    outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
     if args.fill_mask and not args.fill:
         raise CLIError("--fill-mask needs --fill")
     if args.uncertainty:
-        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty"))
+        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
     if args.fill_mask:
-        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask"))
+        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask", inputs=inputs))
     if args.preview:
-        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview"))
+        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs))
     if args.ply:
-        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply"))
+        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
     from ._cli_rig import figure_outputs, write_figures
 
-    figures = figure_outputs(args, with_std=bool(args.uncertainty))
+    figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
     every = outputs + list(figures.values())
     if len({str(p.resolve()) for p in every}) != len(every):
         raise CLIError("output paths must differ from each other")
@@ -440,7 +473,7 @@ def _cmd_stereo(args) -> int:
         k += 1
     if args.ply:
         cam_ref = read_image(args.views[reference], grey=False, dtype=None)
-        pts, cols = depth_to_points(values, focal_px=focal, image=cam_ref)
+        pts, cols = depth_to_points(values, focal_px=focal, image=to_rgb8(cam_ref))  # 16-bit, float: scaled to 0..255
         write_ply(outputs[k], pts, colors=cols, force=args.force)
     valid = np.isfinite(values)
     kind = "depth" if focal is not None else "disparity"
@@ -466,7 +499,7 @@ def _cmd_view(args) -> int:
     from .io import read_image, write_colormap_png
     from . import plot
 
-    out = _check_output(args.out or str(Path(args.file).with_suffix(".png")), force=args.force, exts=(".png",))
+    out = _check_output(args.out or str(Path(args.file).with_suffix(".png")), force=args.force, exts=(".png",), inputs=[args.file])
     data = read_image(args.file, dtype=np.float64)
     if args.colorbar:
         fig = plot.colormap_panel(data, title=Path(args.file).name, unit=args.unit, vmin=args.vmin, vmax=args.vmax)

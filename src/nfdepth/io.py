@@ -17,10 +17,12 @@ Writing
       ``.tif``/``.tiff`` (float32) or ``.npy``; NaN marks unknown values.
     * :func:`write_pfm` / :func:`read_pfm` -- Middlebury PFM.
     * :func:`write_colormap_png` -- a quick-look false-colour PNG.
-    * :func:`write_ply` and :func:`depth_to_points` -- point clouds.
+    * :func:`write_ply` and :func:`depth_to_points` -- point clouds;
+      :func:`to_rgb8` turns any image into their 8-bit colours.
 
-All errors are ``ValueError`` subclasses (:class:`ImageReadError`,
-:class:`OutputExistsError`, :class:`OutputWriteError`) or ``TypeError``.
+All errors are ``ValueError`` subclasses (:class:`ImageReadError` and its
+:class:`ImageRangeError`, :class:`OutputExistsError`, :class:`OutputWriteError`)
+or ``TypeError``.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from ._validate import NFDepthError, check_positive_finite, float_dtype
 
 __all__ = [
     "ImageReadError",
+    "ImageRangeError",
     "OutputExistsError",
     "OutputWriteError",
     "READ_EXTENSIONS",
@@ -53,6 +56,7 @@ __all__ = [
     "write_colormap_png",
     "write_ply",
     "depth_to_points",
+    "to_rgb8",
 ]
 
 #: ITU-R BT.601 luma weights for (R, G, B).
@@ -68,6 +72,10 @@ ARRAY_EXTENSIONS = (".pfm", ".tif", ".tiff", ".npy")
 
 class ImageReadError(NFDepthError):
     """An image file could not be read (missing, a directory, unsupported, broken)."""
+
+
+class ImageRangeError(ImageReadError):
+    """An image file holds finite values beyond the requested float type (float64 data read as float32)."""
 
 
 class OutputExistsError(NFDepthError):
@@ -280,6 +288,10 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
     ImageReadError
         "cannot read image 'PATH': reason" for a missing file, a directory,
         an empty, broken or truncated file, or an unsupported extension.
+    ImageRangeError
+        "cannot read image 'PATH': N pixel(s) beyond the float32 range ..."
+        for a float64 file with finite values beyond float32 when ``dtype``
+        is float32 (an :class:`ImageReadError`).
     ValueError
         If ``dtype`` is not float32, float64 or None.
 
@@ -311,12 +323,30 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
         arr = arr.astype(np.uint8)
     if arr.ndim == 3 and arr.shape[-1] == 1:
         arr = arr[..., 0]
-    with np.errstate(over="ignore"):  # float64 beyond float32 becomes inf; as_image reports it
+    stored = arr
+    with np.errstate(over="ignore"):  # float64 beyond float32 becomes inf: reported below
         if grey and arr.ndim == 3:
             arr = to_grey(arr, dtype=out_dtype)
         if out_dtype is not None:
             arr = arr.astype(out_dtype, copy=False)
+    if out_dtype is not None and stored.dtype.kind == "f" and stored.dtype.itemsize > out_dtype.itemsize:
+        _check_no_overflow(path, stored, arr)
     return arr
+
+
+def _check_no_overflow(path: Path, stored: np.ndarray, converted: np.ndarray) -> None:
+    """Refuse finite stored values that became inf in the narrower float type (not NaN or inf in the file)."""
+    finite = np.isfinite(stored)
+    if converted.ndim < stored.ndim:  # colour to grey: a pixel is finite if all its channels are
+        finite = np.all(finite, axis=-1)
+    over = finite & ~np.isfinite(converted)
+    if over.any():
+        peak = float(np.max(np.abs(stored[np.isfinite(stored)])))
+        raise ImageRangeError(
+            f"cannot read image '{path}': {int(np.count_nonzero(over))} pixel(s) beyond the {converted.dtype} range "
+            f"(max |value| {peak:.3g}, {converted.dtype} reaches {float(np.finfo(converted.dtype).max):.3g}); "
+            "rescale the intensities, or read it with dtype=float64 in Python"
+        )
 
 
 def _check_is_file(path: Path) -> None:
@@ -618,7 +648,7 @@ def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
     """Back-project a depth map to 3-D points in the camera frame.
 
     ``X = (col - cx) Z / f``, ``Y = (row - cy) Z / f`` (X right, Y down, Z
-    forward; see CONVENTIONS.md).
+    forward; see docs/how-it-works.md, "Conventions").
 
     Parameters
     ----------
@@ -632,7 +662,8 @@ def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
         ``(H-1)/2``.
     image : array_like, shape (H, W) or (H, W, 3), optional, keyword-only
         Colour (RGB) or grey image for point colours; float values are
-        rounded and clipped to 0..255.
+        rounded and clipped to 0..255 (pass ``to_rgb8(image)`` for a 16-bit
+        or float image in another range).
 
     Returns
     -------
@@ -668,3 +699,40 @@ def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
             img = np.clip(np.rint(np.nan_to_num(img.astype(np.float64))), 0, 255).astype(np.uint8)
         colors = np.ascontiguousarray(img[rows, cols])
     return pts, colors
+
+
+def to_rgb8(image) -> np.ndarray:
+    """An image as 8-bit RGB, shape (H, W, 3), for point colours (:func:`write_ply`).
+
+    Grey is repeated into three channels and alpha dropped. ``uint8`` values
+    are kept; any other dtype (16-bit, float) is scaled by 255 over its
+    largest finite value (at least 1), so colours follow the intensities
+    whatever the bit depth. NaN and negative values become 0, +inf 255.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W) or (H, W, C) with C in 1..4
+        Grey, grey + alpha, RGB or RGBA (R, G, B order, as :func:`read_image`
+        with ``grey=False``).
+
+    Returns
+    -------
+    ndarray, uint8, shape (H, W, 3)
+    """
+    arr = np.asarray(image)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+        msg = f"image must be a real numeric image, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] in (1, 2, 3, 4))):
+        msg = f"image must have shape (H, W) or (H, W, C) with C in 1..4, got shape {arr.shape}"
+        raise ValueError(msg)
+    if arr.ndim == 3:
+        arr = arr[..., :3] if arr.shape[-1] >= 3 else arr[..., 0]
+    if arr.ndim == 2:
+        arr = np.repeat(arr[..., None], 3, axis=2)
+    if arr.dtype == np.uint8:
+        return np.ascontiguousarray(arr)
+    values = arr.astype(np.float64)
+    finite = values[np.isfinite(values)]
+    scale = 255.0 / max(float(finite.max()) if finite.size else 0.0, 1.0)
+    return np.clip(np.rint(np.nan_to_num(values * scale, nan=0.0)), 0, 255).astype(np.uint8)

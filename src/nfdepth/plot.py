@@ -13,8 +13,6 @@ display, no global state) and writes it atomically. Panels follow the paper:
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -34,20 +32,13 @@ __all__ = [
 
 
 def save_figure(fig: Figure, path, *, dpi: int = 110) -> Path:
-    """Write ``fig`` as PNG atomically (temporary file, then rename)."""
+    """Write ``fig`` as PNG atomically, replacing ``path`` (:func:`nfdepth.io.atomic_write`: mode from the umask)."""
+    from .io import atomic_write
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".png", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight"), force=True)
 
 
 def _figure(width_in=4.0, height_in=4.0) -> Figure:
