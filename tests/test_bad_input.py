@@ -686,10 +686,14 @@ def test_cli_warnings_are_one_line(capfd, monkeypatch):
 _RUNNER = """
 import signal, sys, time
 signal.signal(signal.SIGINT, signal.default_int_handler)  # even when started with SIGINT ignored
-if sys.argv[1] == "slow-write":
+if sys.argv[1] in ("slow-write", "second-write"):
     import nfdepth.io as io
     real = io.atomic_write
+    calls = []
     def slow(path, writer_fn, *, force=False):
+        calls.append(path)
+        if sys.argv[1] == "second-write" and len(calls) == 1:
+            return real(path, writer_fn, force=force)  # the first output completes
         def writer(fh):
             fh.write(b"Pf\\n partial")
             fh.flush()
@@ -718,7 +722,16 @@ def _big_views(folder: Path, shape=(1600, 2400)) -> list[Path]:
 
 @pytest.mark.slow
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
-@pytest.mark.parametrize(("mode", "sig", "code"), [("compute", signal.SIGINT, 130), ("compute", signal.SIGTERM, 143), ("slow-write", signal.SIGINT, 130), ("slow-write", signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    ("mode", "sig", "code"),
+    [
+        ("compute", signal.SIGINT, 130),
+        ("compute", signal.SIGTERM, 143),
+        ("slow-write", signal.SIGINT, 130),
+        ("slow-write", signal.SIGTERM, 143),
+        ("second-write", signal.SIGTERM, 143),  # --out complete, --uncertainty being written
+    ],
+)
 def test_interrupted_stereo_leaves_no_file(tmp_path, mode, sig, code):
     views = _big_views(tmp_path) if mode == "compute" else _big_views(tmp_path, (48, 64))
     out = tmp_path / "out" / "depth.pfm"
@@ -745,3 +758,5 @@ def test_interrupted_stereo_leaves_no_file(tmp_path, mode, sig, code):
     assert "Traceback" not in stderr
     assert len(stderr.strip().splitlines()) == 1 and "no partial output written" in stderr
     assert list(out.parent.iterdir()) == []  # no output, no temporary file
+    # an output the run had completed is removed too (it said "no partial output" and left it)
+    assert ("removed the 1 output(s) it had completed" in stderr) == (mode == "second-write"), stderr

@@ -12,8 +12,9 @@ code  meaning
 3     an input file could not be read
 4     an output could not be written, or exists (use ``--force``)
 5     data set not found, or its download failed (``fetch-data``)
-130   interrupted (Ctrl-C, SIGINT); no partial output is left behind
-143   terminated (SIGTERM); no partial output is left behind
+130   interrupted (Ctrl-C, SIGINT); no partial output is left behind (the
+      outputs the run had already completed are removed)
+143   terminated (SIGTERM); the same
 ====  ==========================================================
 """
 
@@ -625,11 +626,38 @@ def main(argv=None) -> int:
             warnings.showwarning = _one_line_warning
             return _main(argv, debug)
     finally:
+        from . import io
+
+        io.COMPLETED_WRITES = None  # recorded during a run only
         if previous_sigterm is not None:
             signal.signal(signal.SIGTERM, previous_sigterm)
 
 
+def _roll_back_outputs() -> str:
+    """Remove the files this interrupted run completed (the new ones); say what was done, for the one-line message."""
+    from . import io
+
+    removed, replaced = [], []
+    for path, existed in io.COMPLETED_WRITES or ():
+        if existed:
+            replaced.append(str(path))  # the old content is gone (--force): nothing to restore
+            continue
+        try:
+            path.unlink()
+            removed.append(str(path))
+        except OSError:
+            replaced.append(str(path))
+    io.COMPLETED_WRITES = []
+    note = f"; removed the {len(removed)} output(s) it had completed" if removed else ""
+    if replaced:
+        note += f"; already written before the interruption: {', '.join(replaced)}"
+    return note
+
+
 def _main(argv, debug: bool) -> int:
+    from . import io
+
+    io.COMPLETED_WRITES = []
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -640,10 +668,11 @@ def _main(argv, debug: bool) -> int:
     except SystemExit as exc:  # --help / --version
         return int(exc.code or 0)
     except KeyboardInterrupt as exc:
+        note = _roll_back_outputs()
         if isinstance(exc, _Terminated):
-            print("nfdepth: terminated (SIGTERM); no partial output written", file=sys.stderr)
+            print(f"nfdepth: terminated (SIGTERM); no partial output written{note}", file=sys.stderr)
             return EXIT_TERMINATED
-        print("nfdepth: interrupted; no partial output written", file=sys.stderr)
+        print(f"nfdepth: interrupted; no partial output written{note}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except CLIError as exc:
         if debug:

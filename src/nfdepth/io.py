@@ -367,6 +367,12 @@ def _current_umask() -> int:
     return mask
 
 
+#: During a command-line run (else None): the files :func:`atomic_write` has
+#: completed, each with whether it replaced an existing file. An interrupted
+#: run removes its new files, so that it leaves no part of its outputs behind.
+COMPLETED_WRITES: list[tuple[Path, bool]] | None = None
+
+
 def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool = False) -> Path:
     """Write a file atomically through ``writer_fn``.
 
@@ -416,6 +422,7 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
     except OSError as exc:
         raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc} (directory '{parent}')") from None
     tmp = Path(tmp_name)
+    existed = path.exists()
     try:
         with os.fdopen(fd, "wb") as fh:
             writer_fn(fh)
@@ -442,6 +449,8 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
             pass
         except OSError:  # pragma: no cover
             pass
+    if COMPLETED_WRITES is not None:
+        COMPLETED_WRITES.append((path, existed))
     return path
 
 
