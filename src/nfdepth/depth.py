@@ -1,6 +1,6 @@
 """Depth from relative normal flow (paper eq. 4, 5, 6).
 
-Per point, with everything in pixels per unit time (CONVENTIONS):
+Per point, with everything in pixels per unit time (docs/how-it-works.md, "Conventions"):
 
 .. math::
     \\Delta V_n = A + B \\rho,\\qquad \\rho = 1/Z

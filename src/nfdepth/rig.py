@@ -28,7 +28,7 @@ documented in ``docs/rig-format.md``; in short::
     # or: poses = "poses.csv"     # frame,x,y,z[,rx,ry,rz]; relative to this file
 
 Everything inside the library is in radians and in the conventions of
-``CONVENTIONS.md``: the rig gives the *camera's* motion ``T``, ``w``; the
+docs/how-it-works.md ("Conventions"): the rig gives the *camera's* motion ``T``, ``w``; the
 scene moves relative to it as ``V = -T``, ``Omega = -w``
 (:meth:`Rig.relative_motion`).
 
@@ -280,7 +280,7 @@ class MotionSpec:
     crossings: tuple | None = None
 
     def relative_motion(self) -> RigidMotion:
-        """``(dV, dOmega) = (-T, -w)`` in radians (CONVENTIONS: a camera moving by T sees V = -T)."""
+        """``(dV, dOmega) = (-T, -w)`` in radians (docs/how-it-works.md, "Conventions": a camera moving by T sees V = -T)."""
         return RigidMotion(translation=0.0 - self.velocity + 0.0, rotation=0.0 - np.deg2rad(self.rotation_deg) + 0.0)
 
     def __eq__(self, other) -> bool:

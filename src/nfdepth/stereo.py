@@ -15,7 +15,7 @@ measurement in a coarse-to-fine warping scheme:
    sequence; the residual disparity ``delta`` is the (negative) normal flow of
    the warped sequence along the baseline. With the camera moving toward +X
    the flow is ``u = -delta`` per unit position, so paper eq. 6 reads, in
-   disparity form (``d = f b / Z``, :doc:`CONVENTIONS`)::
+   disparity form (``d = f b / Z``, docs/how-it-works.md, "Conventions")::
 
        delta = -Vn / cos(alpha) = I_t / I_col .
 

@@ -17,7 +17,7 @@ pixel, computed in closed form with Green's theorem (see
 :func:`polygon_coverage`). There is no supersampling, so sub-pixel edge
 displacements (0.1 px in the paper's experiments) are rendered faithfully.
 
-Coordinates and signs follow ``CONVENTIONS.md``: camera frame X right, Y down,
+Coordinates and signs follow docs/how-it-works.md, "Conventions": camera frame X right, Y down,
 Z forward; ``col = cx + f X/Z``, ``row = cy + f Y/Z``; ``(V, Omega)`` is the
 motion of the scene relative to the camera, ``dP/dt = V + Omega x P``.
 
