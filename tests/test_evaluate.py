@@ -450,3 +450,13 @@ def test_nfdepth_is_also_scored_on_the_points_a_peer_shares(monkeypatch):
     assert labels.index(("nfdepth", "edges & sgbm")) == labels.index(("sgbm", "at nfdepth edges")) + 1
     assert ("nfdepth", "edges & waxman_sinha") not in labels
     assert "nfdepth (edges & sgbm)" in render_markdown(res)
+
+
+@pytest.mark.parametrize(("fn", "name", "ok_width", "columns"), [(baselines.sgbm_disparity, "StereoSGBM", 19, 18), (baselines.stereo_bm_disparity, "StereoBM", 24, 23)])
+def test_two_view_peers_say_when_the_images_are_too_narrow(fn, name, ok_width, columns):
+    """OpenCV needs width - numDisparities > blockSize // 2; below that it raised an internal
+    error (``nfdepth evaluate tsukuba --downsample 24``: exit 1). Now a ValueError that says so."""
+    img = np.random.default_rng(0).integers(0, 255, (40, 30)).astype(np.uint8)
+    assert fn(img[:, :ok_width], img[:, :ok_width]).shape == (40, ok_width)
+    with pytest.raises(ValueError, match=rf"^the images are {ok_width - 1} px wide: {name} with 16 disparities and a \d+ px block needs more than {columns} columns"):
+        fn(img[:, : ok_width - 1], img[:, : ok_width - 1])

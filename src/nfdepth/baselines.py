@@ -149,6 +149,16 @@ def _check_num_disparities(num_disparities, width: int, max_disparity=None) -> i
     return int(num_disparities)
 
 
+def _check_width(width: int, nd: int, bs: int, name: str) -> None:
+    """OpenCV needs ``width - numDisparities > blockSize // 2`` (else it raises an internal error)."""
+    if width - nd <= bs // 2:
+        msg = (
+            f"the images are {width} px wide: {name} with {nd} disparities and a {bs} px block needs more than "
+            f"{nd + bs // 2} columns (use larger images, e.g. a smaller downsampling factor)"
+        )
+        raise ValueError(msg)
+
+
 def _check_block(block_size, *, low: int, high: int) -> int:
     msg = f"block_size must be an odd integer in [{low}, {high}], got {block_size!r}"
     if isinstance(block_size, bool) or not isinstance(block_size, (int, float, np.integer, np.floating)):
@@ -210,6 +220,7 @@ def sgbm_disparity(left, right, *, num_disparities=None, block_size: int = 5, mo
         raise ValueError(msg)
     bs = _check_block(block_size, low=1, high=11)
     nd = _check_num_disparities(num_disparities, l8.shape[1], max_disparity)
+    _check_width(l8.shape[1], nd, bs, "StereoSGBM")
     cn = 1 if l8.ndim == 2 else 3
     matcher = cv2.StereoSGBM_create(
         minDisparity=0,
@@ -239,6 +250,7 @@ def stereo_bm_disparity(left, right, *, num_disparities=None, block_size: int = 
     l8, r8 = _grey_uint8(l8, "left"), _grey_uint8(r8, "right")
     bs = _check_block(block_size, low=5, high=51)
     nd = _check_num_disparities(num_disparities, l8.shape[1], max_disparity)
+    _check_width(l8.shape[1], nd, bs, "StereoBM")
     matcher = cv2.StereoBM_create(numDisparities=nd, blockSize=bs)
     matcher.setTextureThreshold(10)
     matcher.setUniquenessRatio(15)
