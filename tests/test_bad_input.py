@@ -569,6 +569,8 @@ def _cli_cases(tmp: Path, v):
         ("focal negative", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "-10", "--baseline", "1"], 2, "--focal-px must be a positive number, got -10"),
         ("baseline zero", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10", "--baseline", "0"], 2, "--baseline must be a positive number, got 0"),
         ("focal without baseline", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10"], 2, "--focal-px and --baseline go together"),
+        ("focal baseline overflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e300", "--baseline", "1e300"], 2, "--focal-px 1e+300 times --baseline 1e+300 is outside the floating-point range"),
+        ("focal baseline underflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e-300", "--baseline", "1e-300"], 2, "--focal-px 1e-300 times --baseline 1e-300 is outside the floating-point range"),
         ("ply without depth", ["stereo", v0, v1, v2, "--out", out, "--ply", str(tmp / "p.ply")], 2, "--ply needs --focal-px and --baseline"),
         ("reference range", ["stereo", v0, v1, v2, "--out", out, "--reference", "3"], 2, "--reference must index one of the 3 views (0..2), got 3"),
         ("stereo threads", ["stereo", v0, v1, v2, "--out", out, "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),

@@ -720,3 +720,12 @@ def test_the_same_image_twice_warns():
         static_stereo([v[0], v[0], v[2]], reference=1)
     with pytest.warns(UserWarning, match=r"views 0 and 1, 0 and 2, 1 and 2 are the same image"):
         static_stereo([v[1], v[1], v[1]], reference=1)
+
+
+def test_depth_refuses_a_focal_baseline_product_outside_the_float_range():
+    """focal 1e300 and baseline 1e300 wrote an all-NaN depth map, 1e-300 and 1e-300 all zeros."""
+    r = static_stereo(_plane_views(2.0), reference=1)
+    for f, b in ((1e300, 1e300), (1e-300, 1e-300)):
+        with pytest.raises(ValueError, match=r"focal_px \* baseline = .* is outside the floating-point range"):
+            r.depth(focal_px=f, baseline=b)
+    assert np.nanmedian(r.depth(focal_px=1e150, baseline=1e-150)) == pytest.approx(0.5, rel=1e-3)

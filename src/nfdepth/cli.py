@@ -366,6 +366,8 @@ def _cmd_stereo(args) -> int:
     baseline = _positive("--baseline", args.baseline)
     if (focal is None) != (baseline is None):
         raise CLIError("--focal-px and --baseline go together: give both for depth output, or neither for disparity")
+    if focal is not None and not (np.isfinite(focal * baseline) and focal * baseline >= sys.float_info.min):
+        raise CLIError(f"--focal-px {focal:g} times --baseline {baseline:g} is outside the floating-point range: give the baseline in a unit that keeps the product finite and nonzero")
     if args.ply and focal is None:
         raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
     if args.threads is not None and args.threads < 1:

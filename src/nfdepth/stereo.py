@@ -247,6 +247,7 @@ from __future__ import annotations
 
 import functools
 import math
+import sys
 import time
 import warnings
 from dataclasses import dataclass
@@ -395,6 +396,9 @@ class StereoResult:
         """
         f = check_positive_finite("focal_px", focal_px)
         b = check_positive_finite("baseline", baseline)
+        if not (math.isfinite(f * b) and f * b >= sys.float_info.min):
+            msg = f"focal_px * baseline = {f:g} * {b:g} is outside the floating-point range: give the baseline in a unit that keeps the product finite and nonzero"
+            raise ValueError(msg)
         off = float(disparity_offset_px)
         if not np.isfinite(off):
             msg = f"disparity_offset_px must be finite, got {disparity_offset_px!r}"
