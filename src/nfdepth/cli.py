@@ -620,6 +620,9 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     debug = "--debug" in argv
     previous_sigterm = None
+    from . import io
+
+    io.COMPLETED_WRITES = []  # this run's outputs, removed if it is interrupted
     if threading.current_thread() is threading.main_thread():
         previous_sigterm = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
@@ -628,8 +631,6 @@ def main(argv=None) -> int:
             warnings.showwarning = _one_line_warning
             return _main(argv, debug)
     finally:
-        from . import io
-
         io.COMPLETED_WRITES = None  # recorded during a run only
         if previous_sigterm is not None:
             signal.signal(signal.SIGTERM, previous_sigterm)
@@ -649,7 +650,6 @@ def _roll_back_outputs() -> str:
             removed.append(str(path))
         except OSError:
             replaced.append(str(path))
-    io.COMPLETED_WRITES = []
     note = f"; removed the {len(removed)} output(s) it had completed" if removed else ""
     if replaced:
         note += f"; already written before the interruption: {', '.join(replaced)}"
@@ -657,9 +657,6 @@ def _roll_back_outputs() -> str:
 
 
 def _main(argv, debug: bool) -> int:
-    from . import io
-
-    io.COMPLETED_WRITES = []
     try:
         parser = build_parser()
         args = parser.parse_args(argv)

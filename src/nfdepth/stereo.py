@@ -1122,9 +1122,10 @@ def _axis_message(share, pyramids, t, ref, axis, as_given, **search) -> str | No
     )
 
 
-def _lost_match_message(share, candidates, pyramids, t, ref, axis, *, as_given=None, **search) -> str:
+def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=None, **search) -> str:
     """The warning for a cost volume that found no unique match at most textured pixels.
 
+    ``searched``: the range as reported (:func:`_reported_range`).
     ``as_given``: the :func:`_coarse_search` of the views as given, when step
     3d has run it (else it runs here). The coarse search runs twice, on the views as given and reversed: when
     the reversed order matches uniquely at least ``_REVERSED_UNIQUE_SHARE``
@@ -1132,7 +1133,7 @@ def _lost_match_message(share, candidates, pyramids, t, ref, axis, *, as_given=N
     are in the wrong order (with a motion too large for the pyramid, whose
     negative disparities would say so, to follow).
     """
-    where = f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities {candidates[0]:g} and {candidates[-1]:g} px (UNCERTAIN)"
+    where = f"{100.0 * share:.0f} % of the textured pixels have no unique match between disparities {searched[0]:g} and {searched[1]:g} px (UNCERTAIN)"
     given_share = (as_given if as_given is not None else _coarse_search(pyramids, t, ref, **search))[1]
     reversed_share = _coarse_search(pyramids, -t, ref, **search)[1]
     if reversed_share >= _REVERSED_UNIQUE_SHARE and reversed_share >= 2.0 * given_share:
@@ -1481,7 +1482,7 @@ def static_stereo(
     elif levels < 1 or (min(shape) >> (levels - 1)) < 4:
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
-    levels = 1 if search_range is not None else int(levels)
+    levels = 1 if search_range is not None else levels
     noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
     p1, p99 = np.percentile(views[ref], [1, 99])
     spread = float(p99 - p1)
@@ -1498,6 +1499,7 @@ def static_stereo(
     var = np.full(d.shape, np.inf, np.float32)
     guided_radius = max(1, int(round(guided_scale * dense_window_px)))
     guide = [_guide(lv, p1, spread) for lv in pyramids[ref]]
+    searched = axis_message = None  # the cost volume's range as reported; the axis warning
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
         reference_nodes = _ReferenceNodes.of(smoothed[ref])
@@ -1569,18 +1571,18 @@ def static_stereo(
                     if retry[4] < share:
                         d, margin, candidates, step, share, at_end = retry
             del volume, feats, src
-            message = axis_message = None
+            searched = _reported_range(candidates, search_range, unit)
+            message = None
             if share > _AXIS_CHECK_SHARE:
                 as_given = as_given if as_given is not None else _coarse_search(pyramids, t, ref, **coarse_search)
                 message = axis_message = _axis_message(share, pyramids, t, ref, axis, as_given, **coarse_search)
             if message is None and share > _LOST_MATCH_SHARE:
-                message = _lost_match_message(share, _reported_range(candidates, search_range, unit), pyramids, t, ref, axis, as_given=as_given, **coarse_search)
+                message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
             if message is not None:
                 warnings.warn(message, UserWarning, stacklevel=2)
             if step > cost_step_px * (1.0 + 1e-9):
-                shown = _reported_range(candidates, search_range, unit)
                 warnings.warn(
-                    f"the search range {shown[0]:g}..{shown[1]:g} px per unit of position holds more than "
+                    f"the search range {searched[0]:g}..{searched[1]:g} px per unit of position holds more than "
                     f"{_MAX_CANDIDATES} candidates at cost_step_px = {cost_step_px:g} px: searched in {step:.3g} px steps instead, "
                     "so matches are coarse (narrow disparity_range_px / --disparity-range)",
                     UserWarning,
@@ -1631,9 +1633,9 @@ def static_stereo(
     var[~(var >= 0)] = np.inf
     std = np.sqrt(var).astype(np.float32)
     reason[~np.isfinite(std)] = Reason.UNDETERMINABLE
-    if cost_volume and min_cost_margin > 0:
-        reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
     if cost_volume:
+        if min_cost_margin > 0:
+            reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
         reason[(reason == Reason.OK) & at_end] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
@@ -1667,9 +1669,9 @@ def static_stereo(
         # consistency with the dense (propagated) field: a point-wise estimate that
         # left its neighbourhood's disparity straddles a depth step or an occlusion
         r_e[(r_e == Reason.OK) & ~(np.abs(d_e - d_dense_e) <= max_edge_disagreement_px)] = Reason.UNCERTAIN
-        if cost_volume and edge_cost_margin > 0:
-            r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
         if cost_volume:
+            if edge_cost_margin > 0:
+                r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
             r_e[(r_e == Reason.OK) & at_end[er, ec]] = Reason.UNCERTAIN
         if edge_step_px > 0:
             # along the baseline (where occlusions lie) and across the edge (its normal)
@@ -1712,7 +1714,7 @@ def static_stereo(
     reason[(reason == Reason.OK) & ~(disparity > -0.5)] = Reason.NOT_POSITIVE
     n_ok = int(np.count_nonzero(reason == Reason.OK))
     n_neg = int(np.count_nonzero(reason == Reason.NOT_POSITIVE))
-    if n_neg > n_ok and not (cost_volume and axis_message):  # the axis warning says why
+    if n_neg > n_ok and not axis_message:  # the axis warning says why
         warnings.warn(
             f"{n_neg} determinable pixels have a negative disparity against {n_ok} positive (NOT_POSITIVE): "
             f"are the views in the wrong order? Scene points must shift toward -{'col' if axis == 'x' else 'row'} "
@@ -1734,5 +1736,5 @@ def static_stereo(
         runtime_s=time.perf_counter() - start,
         noise_std=noise,
         axis=axis,
-        search_range_px=_reported_range(candidates, search_range, unit) if cost_volume else None,
+        search_range_px=searched,
     )

@@ -375,8 +375,7 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
     if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
         msg = f"positions must have shape (N, 3) with finite values, got shape {p.shape}"
         raise ValueError(msg)
-    if len(p) and np.all(p == p[0]):
-        raise ValueError(f"positions: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
+    _refuse_static(p, "positions", ValueError)
     return VideoSpec(positions=p)
 
 
@@ -413,8 +412,13 @@ def _check_spec_moves(spec: VideoSpec, rig: Rig | None) -> None:
         what = f"rig '{rig.source}': video.positions" if rig is not None and rig.source else "video.positions"
     else:
         return  # a velocity is checked non-zero where it is read
+    _refuse_static(p, what, RigError)
+
+
+def _refuse_static(p, what: str, error) -> None:
+    """Raise ``error`` when every camera position in ``p`` (N, 3) is the same."""
     if len(p) and np.all(p == p[0]):
-        raise RigError(f"{what}: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
+        raise error(f"{what}: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
 
 
 def _camera_rotation(spec: VideoSpec, frame: int, reference) -> np.ndarray:
