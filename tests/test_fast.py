@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+import os
+
 import cv2
 import numpy as np
 import pytest
@@ -242,6 +245,26 @@ def test_bench_records_well_formed(backend):
         assert r["ratio_to_sgbm"] > 0 and r["ratio_to_floor"] > 0
     table = bench.render_markdown(records)
     assert table.startswith("| case |") and "nf_edges" in table
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX file modes")
+def test_bench_json_is_written_atomically_with_the_outputs_mode(tmp_path, monkeypatch, backend, capsys):
+    if backend == "numpy":
+        pytest.skip("bench runs the default backend only")
+    records = bench.run_benchmarks(quick=True, sizes=[(60, 80)], repeats=1)
+    monkeypatch.setattr(bench, "run_benchmarks", lambda **_: records)
+    out = tmp_path / "b.json"
+    out.write_text("an older run")
+    mask = os.umask(0o027)
+    try:
+        assert bench.bench_main(json_path=out, quick=True) == 0
+    finally:
+        os.umask(mask)
+    assert out.stat().st_mode & 0o777 == 0o640  # was 0600 (mkstemp's mode)
+    payload = json.loads(out.read_text())
+    assert payload["records"] == records and payload["sigma_px"] == bench.SIGMA_PX
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.json"]
+    assert "| nf_edges |" in capsys.readouterr().out
 
 
 def test_deterministic_and_streaming_bit_identical(backend):

@@ -42,13 +42,14 @@ from __future__ import annotations
 import json
 import os
 import platform
-import tempfile
 import time
 import tracemalloc
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from .io import atomic_write
 
 __all__ = ["DEFAULT_SIZES", "run_benchmarks", "render_markdown", "bench_main"]
 
@@ -359,19 +360,8 @@ def bench_main(*, json_path=None, quick: bool = False, threads: int = 1) -> int:
     records = run_benchmarks(quick=quick, threads=threads)
     print(render_markdown(records))
     if json_path is not None:
-        path = Path(json_path)
         payload = {"environment": _environment(), "sigma_px": SIGMA_PX, "records": records}
-        directory = path.parent if str(path.parent) else Path(".")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-        try:
-            with os.fdopen(fd, "w") as fh:
-                json.dump(payload, fh, indent=2)
-                fh.write("\n")
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        text = json.dumps(payload, indent=2) + "\n"
+        # atomically, with the mode of every other output (umask), replacing an older run's file
+        atomic_write(json_path, lambda fh: fh.write(text.encode()), force=True)
     return 0
