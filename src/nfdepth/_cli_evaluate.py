@@ -115,12 +115,14 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)
     select_views(3, 1, views)
     root, names = resolve_dataset(args.dataset, args.data)
-    if args.downsample > 1 and len(names) > 1:  # before any output: the factor must fit every scene (loading is < 1 s)
+    loaded = {}
+    if args.downsample > 1 and len(names) > 1:  # before any output: the factor must fit every scene (kept, not read twice)
         for name in names:
-            _check_downsample(args.downsample, datasets.load_scene(name, root), CLIError)
+            loaded[name] = datasets.load_scene(name, root)
+            _check_downsample(args.downsample, loaded[name], CLIError)
     results = []
     for name in names:
-        scene = datasets.load_scene(name, root)
+        scene = loaded.pop(name) if name in loaded else datasets.load_scene(name, root)
         _check_downsample(args.downsample, scene, CLIError)
         res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None)
         print(_fmt_table(res), flush=True)
