@@ -116,7 +116,16 @@ measurement in a coarse-to-fine warping scheme:
    says the views move along the other axis (:func:`_axis_message`). On
    the eight real scenes transposed, 51-98 % had no unique match, and the
    search across matched 88-99 % against 43-79 %; in their own orientation
-   at most 25 % had none, and across matched 11-54 points less.
+   at most 25 % had none, and across matched 11-54 points less. Smaller
+   motions across the baseline (sub-pixel to a few px per view; the bundled
+   pyramid's column run as a row) still match uniquely, into a wrong map:
+   for them the global shift of every view against the reference
+   (:func:`_view_shifts`: phase correlation, refined by Lucas-Kanade steps,
+   1.5 ms for three 640 x 480 views) gives the warning when, over the views,
+   the shift across the baseline is more than twice that along it and at
+   least 0.25 px per view (:func:`_shift_message`; the eight real scenes in
+   their own orientation: at most 0.012 times). One warning either way: the
+   coarse search's when it speaks.
 4. At the finest level, before the final measurement, a smooth intensity
    offset of every warped view against the reference is estimated and
    removed (:func:`_photometric_offsets`, ``photometric_window_px``). Real
@@ -299,6 +308,35 @@ _REVERSED_UNIQUE_SHARE = 0.5
 _AXIS_CHECK_SHARE = 0.3
 _ACROSS_UNIQUE_SHARE = 0.8
 _ACROSS_MARGIN = 0.1
+# The global shift of every view against the reference (:func:`_view_shifts`,
+# :func:`_shift_message`), for the small motions the check above never sees
+# (sub-pixel to a few px per view across the baseline still match "uniquely"):
+# measured on the smallest cv2.pyrDown level whose shorter side is at least
+# _SHIFT_WORK_SIDE px (1.5 ms for three 640 x 480 views), not on views
+# smaller than _SHIFT_MIN_SIDE px, nor where the overlap's gradients are
+# nearly parallel (det / trace^2 of their 2 x 2 moment matrix below
+# _SHIFT_MIN_ISOTROPY; 1/4 for an isotropic texture). A phase-correlation
+# peak counts when its response reaches _SHIFT_MIN_RESPONSE / sqrt(pixels):
+# between unrelated textures (16 x 16 to 240 x 320 px, 50 pairs per size) the
+# largest was 16-19 / sqrt(pixels); the real scenes' views give 0.14-0.98
+# (Tsukuba's outer two, 0.04 and 0.06, are left out), shifted textures
+# 0.9-1.3. The views move across the baseline when, summed over the counted
+# views, the shift across it is more than _ACROSS_RATIO times the shift along
+# it (a baseline more than 63 degrees off) and at least _ACROSS_MIN_PX per
+# view: half the smallest motion to catch (0.5 px per view), above the
+# measurement's error (at most 0.18 px on shifted textures, 0.01 px on static
+# views with noise 2). In their own orientation the eight real scenes (all
+# views) give across / along 0.001-0.012 (at most 1.3 px across, Reindeer's
+# outermost view, against 62 px along), the bundled pyramid row 0.04;
+# transposed, 80 or more.
+_SHIFT_MIN_SIDE = 16
+_SHIFT_WORK_SIDE = 160
+_SHIFT_MIN_ISOTROPY = 1e-3
+_SHIFT_ROUNDS = 3
+_SHIFT_MAX_STEP_PX = 0.6
+_SHIFT_MIN_RESPONSE = 25.0
+_ACROSS_RATIO = 2.0
+_ACROSS_MIN_PX = 0.25
 _MAX_CANDIDATES = 512
 # A row of the reference has left a view once a reliable pixel lands within
 # this many px of the border the view loses (:func:`_inside_another_view`).
@@ -1118,7 +1156,120 @@ def _axis_message(share, pyramids, t, ref, axis, as_given, **search) -> str | No
     return (
         f"{100.0 * share:.0f} % of the textured pixels have no unique match along {axis} (UNCERTAIN): do the views move along {other}? "
         f"A coarse search across the baseline matches {100.0 * across:.0f} % of them uniquely, against {100.0 * along:.0f} % along it. "
-        f"Give axis='{other}' (--axis {other}) for views that move along the {'rows' if other == 'y' else 'columns'}"
+        f"{_other_axis_advice(axis)}"
+    )
+
+
+def _other_axis_advice(axis) -> str:
+    """What to do about views that move across the baseline ``axis`` (the end of both axis warnings).
+
+    The views of axis "x" are called the row, those of "y" the column, as in
+    :func:`nfdepth.static_stereo_xy` (``--column``), which runs one of each.
+    """
+    if axis == "x":
+        return (
+            "Give axis='y' (--axis y) for views that move along the rows, "
+            "or check that the views of the row lie on a horizontal line (and those of --column on a vertical one)"
+        )
+    return (
+        "Give axis='x' (--axis x) for views that move along the columns, "
+        "or check that the views of the column (--column) lie on a vertical line (and those of the row on a horizontal one)"
+    )
+
+
+def _translation_step(ref, view, dc, dr):
+    """One global Lucas-Kanade step ``(col, row)`` of ``view`` against ``ref`` shifted by whole pixels ``(dc, dr)``.
+
+    Least squares on the overlap of the two (blurred, sigma 1 px); None when
+    the overlap is smaller than ``_SHIFT_MIN_SIDE`` px or its texture is
+    one-directional (``_SHIFT_MIN_ISOTROPY``).
+    """
+    h, w = ref.shape
+    if abs(dc) > w - _SHIFT_MIN_SIDE or abs(dr) > h - _SHIFT_MIN_SIDE:
+        return None
+    a = _blur(ref[max(0, -dr) : h - max(0, dr), max(0, -dc) : w - max(0, dc)], 1.0)
+    b = _blur(view[max(0, dr) : h + min(0, dr), max(0, dc) : w + min(0, dc)], 1.0)
+    mean = 0.5 * (a + b)
+    g = (cv2.Sobel(mean, cv2.CV_32F, 1, 0, ksize=1, scale=0.5), cv2.Sobel(mean, cv2.CV_32F, 0, 1, ksize=1, scale=0.5))
+    normal = np.array([[np.vdot(gi, gj) for gj in g] for gi in g], np.float64)
+    if not np.linalg.det(normal) > _SHIFT_MIN_ISOTROPY * np.trace(normal) ** 2:
+        return None  # a texture of parallel lines: no shift along them
+    return np.linalg.solve(normal, [-np.vdot(gi, b - a) for gi in g])
+
+
+def _view_shifts(views, ref):
+    """Global shift ``(col, row)`` (px) of every view against the reference, or None where unreliable.
+
+    ``view(r, c) ~ reference(r - row, c - col)``. The whole-pixel peak of
+    ``cv2.phaseCorrelate`` (Hanning window, means removed), refined by
+    global Lucas-Kanade steps (:func:`_translation_step`) on the overlap
+    aligned by whole pixels, re-aligned while a step exceeds
+    ``_SHIFT_MAX_STEP_PX`` (at most ``_SHIFT_ROUNDS`` times): the phase
+    correlation's own sub-pixel centroid is biased toward whole pixels (a
+    shift of 0.5 px reads 0.17-0.83, one of 0.25 px 0.15-0.37, one of 1 px
+    on a sum of sinusoids 0.49); the steps are within 0.05 px of the shift
+    (0.18 px for a fine texture measured at half size). Where they do not
+    settle (views whose parts move differently, as a scene in depth does)
+    the centroid stands. Measured on a level of ``cv2.pyrDown``
+    (``_SHIFT_WORK_SIDE``), scaled back. A view is None when its peak is
+    below ``_SHIFT_MIN_RESPONSE`` (unrelated or constant images), the views
+    are smaller than ``_SHIFT_MIN_SIDE`` px, or a step finds no texture to
+    measure.
+    """
+    shifts = [None] * len(views)
+    if min(views[ref].shape) < _SHIFT_MIN_SIDE:
+        return shifts
+    images, scale = list(views), 1
+    while min(images[ref].shape) // 2 >= _SHIFT_WORK_SIDE:
+        images, scale = [cv2.pyrDown(v) for v in images], 2 * scale
+    h, w = images[ref].shape
+    window = cv2.createHanningWindow((w, h), cv2.CV_32F)
+    mean = np.float32(images[ref].mean())
+    for k, view in enumerate(images):
+        if k == ref:
+            continue
+        # new arrays every time: cv2.phaseCorrelate (OpenCV 5.0) applies the window to its inputs in place
+        (x, y), response = cv2.phaseCorrelate(images[ref] - mean, view - np.float32(view.mean()), window)
+        if not response >= _SHIFT_MIN_RESPONSE / math.sqrt(h * w):
+            continue
+        dc, dr = round(x), round(y)
+        for _ in range(_SHIFT_ROUNDS):
+            step = _translation_step(images[ref], view, dc, dr)
+            if step is None or np.all(np.abs(step) <= _SHIFT_MAX_STEP_PX):
+                break
+            dc, dr = round(dc + step[0]), round(dr + step[1])
+        if step is None:
+            continue
+        col, row = (dc + step[0], dr + step[1]) if np.all(np.abs(step) <= _SHIFT_MAX_STEP_PX) else (x, y)
+        shifts[k] = (scale * float(col), scale * float(row))
+    return shifts
+
+
+def _listed(items) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
+
+
+def _shift_message(views, ref, *, axis) -> str | None:
+    """The warning for views that move across the baseline ``axis`` (the views as given), or None.
+
+    Summed over the views whose shift :func:`_view_shifts` measures, the
+    shift across the axis must exceed ``_ACROSS_RATIO`` times the shift
+    along it and reach ``_ACROSS_MIN_PX`` per view.
+    """
+    measured = {k: s for k, s in enumerate(_view_shifts(views, ref)) if s is not None}
+    along_i = 0 if axis == "x" else 1
+    along = sum(abs(s[along_i]) for s in measured.values())
+    across = sum(abs(s[1 - along_i]) for s in measured.values())
+    if not measured or not (across > _ACROSS_RATIO * along and across >= _ACROSS_MIN_PX * len(measured)):
+        return None
+    other = "y" if axis == "x" else "x"
+    several = len(measured) > 1
+    names = _listed([str(k) for k in measured])
+    shifts = _listed([f"({round(c, 2) + 0.0:+.2f}, {round(r, 2) + 0.0:+.2f})" for c, r in measured.values()])  # + 0.0: no "-0.00"
+    return (
+        f"view{'s' if several else ''} {names} of the {'row' if axis == 'x' else 'column'} (axis='{axis}') shift{'' if several else 's'} by {shifts} px (col, row) "
+        f"against its reference view {ref}: the scene moves along {other}, across the baseline. {_other_axis_advice(axis)}"
     )
 
 
@@ -1474,6 +1625,7 @@ def static_stereo(
     if levels is not None:
         levels = _as_int("levels", levels, "an integer >= 1")
     _warn_identical_views(views)
+    shift_message = _shift_message(views, ref, axis=axis)  # warned below, unless the other axis warning says it
     if axis == "y":
         views = [np.ascontiguousarray(v.T) for v in views]
     shape = views[0].shape
@@ -1576,7 +1728,7 @@ def static_stereo(
             if share > _AXIS_CHECK_SHARE:
                 as_given = as_given if as_given is not None else _coarse_search(pyramids, t, ref, **coarse_search)
                 message = axis_message = _axis_message(share, pyramids, t, ref, axis, as_given, **coarse_search)
-            if message is None and share > _LOST_MATCH_SHARE:
+            if message is None and share > _LOST_MATCH_SHARE and shift_message is None:
                 message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
             if message is not None:
                 warnings.warn(message, UserWarning, stacklevel=2)
@@ -1604,6 +1756,9 @@ def static_stereo(
                     delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, polish_radius, guided_eps)
                 delta = np.where(np.isfinite(delta), np.clip(delta, -0.5, 0.5), 0.0).astype(np.float32)
                 d = np.clip(d + delta, d_discrete - reach, d_discrete + reach).astype(np.float32)
+    if shift_message is not None and axis_message is None:
+        warnings.warn(shift_message, UserWarning, stacklevel=2)
+        axis_message = shift_message
     # final measurement at the finest level for validity, edges and uncertainty
     m = _measure(smoothed, t, ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes, offset_window_px=photometric_window_px)
     field = GradientField(m.grad_col, m.grad_row, m.slope)
