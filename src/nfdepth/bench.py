@@ -23,8 +23,9 @@ Cases (per image size and scene):
 over ``nf_edges``'s (for ``nf_stream_frame``: streaming cost per frame ÷ from scratch).
 The fast path runs on the fused numba kernels when numba is installed (the
 environment record says which backend ran). ``threads`` sets
-``cv2.setNumThreads``; static stereo's cost volume runs on that many threads
-(its default follows ``cv2.getNumThreads()``), the edge fast path on one.
+``cv2.setNumThreads``; static stereo's cost volume and the edge fast path
+(one triple and streaming) run on that many threads (their defaults follow
+``cv2.getNumThreads()``).
 
 Peak memory is measured with :mod:`tracemalloc` in a separate, untimed call:
 it counts every NumPy array (including the arrays OpenCV returns, which

@@ -42,9 +42,9 @@ with far fewer passes over the image:
   SIMD path depends on buffer alignment).
 
 **Backends.** With numba installed (``USE_NUMBA``; set ``NFDEPTH_NO_NUMBA=1``
-to force the fallback) everything after the smoothing runs as two compiled,
-single-threaded loops (``fastmath=False``: bit-identical across runs, buffers
-and thread counts): one pass over the cell grid (combined stencils, ``I_t``,
+to force the fallback) everything after the smoothing runs as two compiled
+loops (``fastmath=False``: bit-identical across runs, buffers and thread
+counts): one pass over the cell grid (combined stencils, ``I_t``,
 ``|grad I|``, ``vn``, Laplacian signs in cv2's own summation order, the list
 of zero-crossing cells), then, after the percentile (exact, as
 ``np.percentile``), the block tensor (its block means accumulated in the
@@ -58,6 +58,16 @@ values are collected by a compiled loop. It blurs the three frames separately (3
 costs one Gaussian pass plus the fused work; streamed and from-scratch
 results are bit-identical. Without numba the numpy/OpenCV path below runs
 (first numba call compiles, ~9 s; cached on disk afterwards, ~0.4 s).
+
+**Threads** (numba path, ``threads=``, default ``cv2.getNumThreads()``). The
+blurs, the cell-grid pass and the edge-point tests run in row strips of at
+least 64 rows on a shared pool (the calling thread takes one strip), with
+the percentile beside the block tensor's window in between. A strip is
+blurred from its rows plus the kernel radius (bit-identical to the whole
+image's ``cv2.sepFilter2D``, which itself runs on one thread), the cell-grid
+pass primes its row ring at the strip's first row (an even one: whole
+blocks of the tensor), and each strip lists and packs its candidates in its
+own part of the buffers, so results are bit-identical for any thread count.
 
 :class:`StreamingNormalFlow` keeps each frame's smoothed image (and its cell
 mean) in a ring, so a video costs one Gaussian pass per new frame plus the
@@ -80,6 +90,7 @@ NaN off the candidate edge points, see above):
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -244,7 +255,7 @@ class _Workspace(_Pool):
 
 
 class _NbWorkspace(_Pool):
-    """Reusable buffers of the numba path: 3 smoothed frames (from scratch only), I_col, I_row, candidate list, block tensor (27 or 15 B/px)."""
+    """Reusable buffers of the numba path: 3 smoothed frames (from scratch only), I_col, I_row, candidate list, block tensor (27 or 15 B/px; on threads, the blur strips' scratch rows: about 4 B/px more)."""
 
     def __init__(self, shape, frames=True):
         super().__init__(shape)
@@ -258,6 +269,14 @@ class _NbWorkspace(_Pool):
         self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
         self.rows = np.empty(h + 1, np.int64)
         self.tensor, self.read_back = _tensor_buffers(h, w)
+        self._scratch: dict = {}  # per blur strip (threads > 1 only), see _blur_strips
+
+    def scratch(self, i: int, rows: int) -> np.ndarray:
+        """Float32 rows ``(rows, W)`` of blur strip ``i``'s own buffer (kept; grown when needed)."""
+        buf = self._scratch.get(i)
+        if buf is None or buf.shape[0] < rows:
+            buf = self._scratch[i] = np.empty((rows, self.shape[1]), np.float32)
+        return buf[:rows]
 
 
 _local = threading.local()
@@ -395,9 +414,9 @@ def _percentile_linear(values: np.ndarray, q: float) -> float:
 # (stencils, I_t, |grad I|, vn, Laplacian signs, zero-crossing list), the
 # percentile, then one pass over the candidate rows (strong test, angle,
 # structure tensor at the strong candidates only). Compiled with
-# fastmath=False (no reassociation, no FMA contraction), single-threaded:
-# every element's arithmetic is fixed, so results are bit-identical across
-# runs, buffers and thread counts.
+# fastmath=False (no reassociation, no FMA contraction), each call over
+# one strip of rows: every element's arithmetic is fixed, so results are
+# bit-identical across runs, buffers and thread counts.
 
 if _njit is not None:
 
@@ -414,16 +433,19 @@ if _njit is not None:
         return n
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T):
-        """One pass over the cell grid: stencils, I_t, |grad I|, vn, zero crossings, block tensor.
+    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi, off):
+        """One pass over cell rows ``r_lo .. r_hi - 1``: stencils, I_t, |grad I|, vn, zero crossings, block tensor.
 
         Writes ``gc, gr, mag, vn`` (cells), fills ``alpha`` with NaN and ``mask``
         with False, lists the zero-crossing cells inside the border (flat
-        cell indices, row-major) in ``cand`` with the list's start in each
-        cell row in ``rows`` (``rows[h]``: the end), and returns their number. ``T``
-        (hb, wb, 3) receives the gradient products averaged over 2 x 2 blocks
-        of cells (an odd last row or column replicated; the four products
-        summed in the reference's order, :func:`nfdepth.edges.block_structure_tensor`).
+        cell indices, row-major) in ``cand`` from position ``off`` on, with
+        the list's start in each cell row in ``rows``, and returns the
+        list's end. ``T`` (hb, wb, 3) receives the gradient products
+        averaged over 2 x 2 blocks of cells (an odd last row or column
+        replicated; the four products summed in the reference's order,
+        :func:`nfdepth.edges.block_structure_tensor`). ``r_lo`` must be even
+        (whole blocks); each cell's arithmetic does not depend on the rows
+        chosen, so strips give the whole grid's results bit for bit.
         """
         H, W = G1.shape
         h, w = H - 1, W - 1
@@ -439,14 +461,14 @@ if _njit is not None:
         NG = np.empty((2, W), np.uint8)  # Laplacian < 0
         ZC = np.empty(W, np.uint8)
         inside = h > 2 * b and w > 2 * b
-        ncand = 0
-        # prime: rows -1, 0, 1 (clamped)
-        for y in range(-1, 2):
+        ncand = off
+        # prime: rows r_lo - 1, r_lo, r_lo + 1 (clamped)
+        for y in range(r_lo - 1, r_lo + 2):
             _comb_row(G0, G1, G2, w0, w1, w2, min(max(y, 0), H - 1), S[(y + 4) % 4])
-        _dcol_row(S[0], kc1, kc2, matched, DC[0], w)
-        _diff_row(G2, G0, 0, Dt[0])
-        _lap_row(G1, 0, m4, PS[0], NG[0])
-        for r in range(h):
+        _dcol_row(S[r_lo % 4], kc1, kc2, matched, DC[r_lo % 2], w)
+        _diff_row(G2, G0, r_lo, Dt[r_lo % 2])
+        _lap_row(G1, r_lo, m4, PS[r_lo % 2], NG[r_lo % 2])
+        for r in range(r_lo, r_hi):
             y2 = r + 2
             _comb_row(G0, G1, G2, w0, w1, w2, min(y2, H - 1), S[y2 % 4])
             s_m1 = S[(r + 3) % 4]
@@ -513,7 +535,6 @@ if _njit is not None:
                 for c in range(b, w - b):
                     cand[ncand] = base + c
                     ncand += ZC[c]
-        rows[h] = ncand
         return ncand
 
 
@@ -573,16 +594,19 @@ if _njit is not None:
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_select(gc, gr, mag, cand, rows, thr, floor, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask):
-        """Strong test and corner test at the zero-crossing cells listed by :func:`_nb_dense`.
+    def _nb_select(gc, gr, mag, cand, rows, thr, floor, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask, r_lo, r_hi, off, end):
+        """Strong test and corner test at the zero-crossing cells of rows ``r_lo .. r_hi - 1``.
 
-        ``cand`` and ``rows`` are the list of zero-crossing cells and its
-        start in each cell row. The smoothed block tensor ``T`` (hb, wb, 3)
-        is read back bilinearly at each strong candidate with the tables of
-        :func:`nfdepth.edges._block_read_back`, and its eigenvalue ratio is
-        tested in float64. Sets ``mask``; returns the number ``n`` of edge
-        points, whose cell indices are left in ``cand[:n]`` and gradients in
-        the first ``n`` elements of ``gc``/``gr`` (overwritten in place).
+        ``cand[off:end]`` and ``rows`` are the list of those rows'
+        zero-crossing cells and its start in each cell row, as
+        :func:`_nb_dense` left them (``off = r_lo * w``). The smoothed block
+        tensor ``T`` (hb, wb, 3) is read back bilinearly at each strong
+        candidate with the tables of :func:`nfdepth.edges._block_read_back`,
+        and its eigenvalue ratio is tested in float64. Sets ``mask``; returns
+        the number ``n`` of edge points, whose cell indices are left in
+        ``cand[off:off + n]`` and gradients in the elements ``off .. off + n - 1``
+        of ``gc``/``gr`` (overwritten in place; cells of these rows only, so
+        strips of rows can run at once).
 
         Row by row, so that a cell's row is known without an integer division
         (one 64-bit division per point cost a third of this function's time).
@@ -593,26 +617,24 @@ if _njit is not None:
         increase, so the write position never passes a position still to be
         read.
         """
-        h = rows.size - 1
         w = gc.shape[1]
         # strong candidates (``rows`` then indexes them)
-        nstrong = 0
-        start = rows[0]
-        for r in range(h):
-            end = rows[r + 1]
+        nstrong = off
+        start = off
+        for r in range(r_lo, r_hi):
+            stop = rows[r + 1] if r + 1 < r_hi else end
             rows[r] = nstrong
             mr = mag[r]
             base = r * w
-            for q in range(start, end):
+            for q in range(start, stop):
                 flat = cand[q]
                 m = mr[flat - base]
                 cand[nstrong] = flat
                 nstrong += (m >= thr) & (m > floor)
-            start = end
-        rows[h] = nstrong
-        # corner test; the edge points are packed at the front
-        count = 0
-        for r in range(h):
+            start = stop
+        # corner test; the edge points are packed at the front (from ``off``)
+        count = off
+        for r in range(r_lo, r_hi):
             ra, rb, wa, wb_ = r0[r], r1[r], wr0[r], wr1[r]
             Ta = T[ra]
             Tb = T[rb]
@@ -620,7 +642,7 @@ if _njit is not None:
             gcr = gc[r]
             grr = gr[r]
             base = r * w
-            for q in range(rows[r], rows[r + 1]):
+            for q in range(rows[r], rows[r + 1] if r + 1 < r_hi else nstrong):
                 flat = cand[q]
                 c = flat - base
                 ca, cb, ua, ub = c0[c], c1[c], wc0[c], wc1[c]
@@ -647,29 +669,148 @@ if _njit is not None:
                 gr.flat[count] = gyv
                 gc.flat[count] = gxv
                 count += ok
-        return count
+        return count - off
 
 
-def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2) -> NormalFlowEdges:
-    """Normal flow and edge points from three smoothed frames (numba path)."""
+def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> NormalFlowEdges:
+    """Normal flow and edge points from three smoothed frames (numba path), in row strips on ``threads`` threads."""
     p = k.p
     vn, alpha, mag, mask = ws.outputs()
+    w = mag.shape[1]
+    strips = _cell_strips(mag.shape[0], threads)
+    ends = [0] * len(strips)
     w0, w1, w2 = k.nb_weights
-    ncand = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor)
-    if p.min_gradient is None:
-        high = _percentile_linear(mag, 99.0) if mag.size else 0.0
-        min_gradient = p.relative_gradient * high
-    else:
-        min_gradient = p.min_gradient
+
+    def dense(i):
+        r_lo, r_hi = strips[i]
+        ends[i] = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor, r_lo, r_hi, r_lo * w)
+
+    _run_strips(dense, len(strips), threads)
+    ncand = sum(e - r_lo * w for e, (r_lo, _) in zip(ends, strips))
+    tensor = None
+    if ncand and len(strips) > 1:
+        # the block tensor's window runs beside the percentile
+        tensor = _pool(threads).submit(k.smooth_block_tensor, ws.tensor)
+    try:
+        if p.min_gradient is None:
+            high = _percentile_linear(mag, 99.0) if mag.size else 0.0
+            min_gradient = p.relative_gradient * high
+        else:
+            min_gradient = p.min_gradient
+    finally:
+        T = tensor.result() if tensor is not None else None
     if ncand:
-        T = k.smooth_block_tensor(ws.tensor)
+        T = k.smooth_block_tensor(ws.tensor) if T is None else T
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
-        n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ws.rows, np.float32(min_gradient), np.float32(_rounding_floor(G1)), T, *ws.read_back, float(p.max_corner_ratio), mask)
-        # the edge points' gradients are packed at the front of gc/gr (see _nb_select)
-        angle = ws.gc.ravel()[:n]
-        np.arctan2(ws.gr.ravel()[:n], angle, out=angle)
-        alpha.ravel()[ws.cand[:n]] = angle
+        thr, floor = np.float32(min_gradient), np.float32(_rounding_floor(G1))
+        flat_gc, flat_gr, flat_alpha = ws.gc.ravel(), ws.gr.ravel(), alpha.ravel()
+
+        def select(i):
+            r_lo, r_hi = strips[i]
+            off = r_lo * w
+            n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ws.rows, thr, floor, T, *ws.read_back, float(p.max_corner_ratio), mask, r_lo, r_hi, off, ends[i])
+            # the edge points' gradients are packed at the strip's front of gc/gr (see _nb_select)
+            angle = flat_gc[off : off + n]
+            np.arctan2(flat_gr[off : off + n], angle, out=angle)
+            flat_alpha[ws.cand[off : off + n]] = angle
+
+        _run_strips(select, len(strips), threads)
     return NormalFlowEdges(vn, alpha, mag, mask, float(min_gradient))
+
+
+# ------------------------------------------------------------ row strips
+
+_STRIP_MIN_ROWS = 64  # rows per strip at least: below, a thread's hand-off costs more than it saves
+_pools: dict = {}
+_pools_lock = threading.Lock()
+
+
+def _threads(threads) -> int:
+    """The ``threads`` argument: default OpenCV's ``cv2.getNumThreads()`` (so ``cv2.setNumThreads`` governs it)."""
+    return max(1, cv2.getNumThreads()) if threads is None else check_int("threads", threads, 1)
+
+
+def _cell_strips(h: int, threads: int) -> list:
+    """Row strips ``(r_lo, r_hi)`` of an ``h``-row grid for ``threads`` threads, each starting on an even row.
+
+    Results do not depend on them: every row's arithmetic is the same in
+    any strip (see :func:`_nb_dense`).
+    """
+    n = max(1, min(int(threads), h // _STRIP_MIN_ROWS))
+    edges = [0] + [2 * round(i * h / (2 * n)) for i in range(1, n)] + [h]
+    return [(a, b) for a, b in itertools.pairwise(edges) if b > a]
+
+
+def _pool(threads: int):
+    """A shared pool of ``threads - 1`` workers (the calling thread runs a strip itself)."""
+    pool = _pools.get(threads)
+    if pool is None:
+        with _pools_lock:
+            pool = _pools.get(threads)
+            if pool is None:
+                from concurrent.futures import ThreadPoolExecutor
+
+                pool = _pools[threads] = ThreadPoolExecutor(max_workers=threads - 1, thread_name_prefix="nfdepth-fast")
+    return pool
+
+
+def _forget_pools() -> None:
+    """In a forked child: the parent's pool threads do not exist there (a task would wait forever), nor does a lock's holder."""
+    global _pools_lock
+    _pools.clear()
+    _pools_lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pools)
+
+
+def _run_strips(fn, n: int, threads: int) -> None:
+    """``fn(i)`` for ``i`` in ``range(n)``: strip 0 on this thread, the others on the pool; returns when all have ended.
+
+    The kernels release the GIL. Every strip has ended before this returns
+    or raises (they write into the caller's buffers).
+    """
+    if n <= 1 or threads <= 1:
+        for i in range(n):
+            fn(i)
+        return
+    from concurrent.futures import wait
+
+    futures = [_pool(threads).submit(fn, i) for i in range(1, n)]
+    try:
+        fn(0)
+    finally:
+        wait(futures)
+    for f in futures:
+        f.result()
+
+
+def _blur_strips(srcs, dsts, k: _Kernels, threads: int, scratch) -> None:
+    """``_blur`` of each source into its destination, in row strips on ``threads`` threads.
+
+    A strip is smoothed from its rows plus the kernel radius on each side
+    (reflected only at the image's own border), so it is bit-identical to
+    the whole image's ``cv2.sepFilter2D``; each strip goes through its own
+    scratch rows (``scratch(i, rows)``) and only its own rows are copied out.
+    """
+    H = srcs[0].shape[0]
+    strips = _cell_strips(H, threads)
+    if not k.smooth or len(strips) == 1:
+        for src, dst in zip(srcs, dsts):
+            _blur(src, dst, k)
+        return
+    R = k.radius
+
+    def blur(i):
+        y0, y1 = strips[i]
+        a, b = max(0, y0 - R), min(H, y1 + R)
+        tmp = scratch(i, b - a)
+        for src, dst in zip(srcs, dsts):
+            cv2.sepFilter2D(src[a:b], cv2.CV_32F, k.g, k.g, dst=tmp, borderType=cv2.BORDER_REFLECT)
+            dst[y0:y1] = tmp[y0 - a : y1 - a]
+
+    _run_strips(blur, len(strips), threads)
 
 
 # --------------------------------------------------------------- the core
@@ -823,6 +964,7 @@ def normal_flow_edges(
     max_corner_ratio: float = 0.1,
     corner_window_px: float | None = None,
     border_px: int = 2,
+    threads: int | None = None,
 ) -> NormalFlowEdges:
     """Normal flow and edge points of a frame triple, fast path.
 
@@ -845,6 +987,12 @@ def normal_flow_edges(
     corner_window_px : float, optional
         Structure-tensor window; default ``max(sigma_px, 1)`` as in the
         pipelines.
+    threads : int, optional
+        Threads of the numba path: the blurs, the cell-grid pass and the
+        edge-point tests run in row strips of at least 64 rows, on a shared
+        pool. Results are bit-identical for any thread count. Default
+        OpenCV's ``cv2.getNumThreads()``, so ``cv2.setNumThreads`` governs it
+        (the numpy/OpenCV fallback uses OpenCV's own threads only).
 
     Returns
     -------
@@ -852,16 +1000,16 @@ def normal_flow_edges(
         ``vn, alpha, magnitude, mask`` on the cell grid ``(H-1, W-1)``.
     """
     p = _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px)
+    threads = _threads(threads)
     f0, f1, f2 = as_frames("frames", frames, 3, dtype=np.float32)
     k = _kernels(p)
     ws = _workspace(f0.shape)
     if isinstance(ws, _NbWorkspace):
         if not k.smooth:
-            return _nb_run(ws, k, f0, f1, f2)
+            return _nb_run(ws, k, f0, f1, f2, threads)
         G = ws.G
-        for src, dst in zip((f0, f1, f2), G):
-            _blur(src, dst, k)
-        return _nb_run(ws, k, G[0], G[1], G[2])
+        _blur_strips((f0, f1, f2), G, k, threads, ws.scratch)
+        return _nb_run(ws, k, G[0], G[1], G[2], threads)
     w0, w1, w2 = k.weights
     # Weighted sum and difference; then three smoothing passes.
     cv2.addWeighted(f0, w0, f2, w2, 0.0, dst=ws.A)
@@ -906,8 +1054,10 @@ class StreamingNormalFlow:
         max_corner_ratio: float = 0.1,
         corner_window_px: float | None = None,
         border_px: int = 2,
+        threads: int | None = None,
     ):
         self._p = _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px)
+        self._threads = None if threads is None else _threads(threads)  # None: cv2.getNumThreads() at each push
         self._k = _kernels(self._p)
         self._shape = None
         self._ring: deque = deque()  # (smoothed, cell mean) per frame, oldest first
@@ -940,13 +1090,14 @@ class StreamingNormalFlow:
             self._spare.append(self._ring.popleft())
         if self._numba:
             # ring of smoothed frames only: one blur per frame plus the fused per-triple work
+            threads = _threads(self._threads)
             G = self._spare.pop() if self._spare else np.empty(self._shape, np.float32)
-            _blur(img, G, k)
+            _blur_strips((img,), (G,), k, threads, self._ws.scratch)
             self._ring.append(G)
             self._count += 1
             if len(self._ring) < 3:
                 return None
-            return _nb_run(self._ws, k, *self._ring)
+            return _nb_run(self._ws, k, *self._ring, threads)
         if self._spare:
             G, B = self._spare.pop()
         else:

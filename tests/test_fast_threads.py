@@ -1,0 +1,131 @@
+"""The fast path on several threads: row strips give the one-thread results bit for bit."""
+
+from __future__ import annotations
+
+import itertools
+import multiprocessing
+import os
+import threading
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+from nfdepth import fast
+from nfdepth.fast import StreamingNormalFlow, normal_flow_edges
+
+needs_numba = pytest.mark.skipif(not fast.USE_NUMBA, reason="the row strips are the numba path's (numba not installed or NFDEPTH_NO_NUMBA set)")
+
+
+def _frames(shape, seed=0, shift=0.6):
+    """Blocky random texture moving by ``shift`` px per frame along x (cubic warp), float32."""
+    H, W = shape
+    rng = np.random.default_rng(seed)
+    base = cv2.GaussianBlur(rng.random((H + 20, W + 20)), (0, 0), 2.5)
+    base = cv2.GaussianBlur(np.where(base > base.mean(), 210.0, 40.0), (0, 0), 1.0)
+    out = []
+    for t in (-1, 0, 1):
+        M = np.float64([[1, 0, shift * t], [0, 1, 0.3 * shift * t]])
+        out.append(cv2.warpAffine(base, M, (W + 20, H + 20), flags=cv2.INTER_CUBIC)[10:-10, 10:-10].astype(np.float32))
+    return out
+
+
+def _assert_same_bits(got, want):
+    for x, y in zip(got, want):
+        np.testing.assert_array_equal(x, y)
+    assert got.min_gradient == want.min_gradient
+
+
+@needs_numba
+@pytest.mark.parametrize("shape", [(259, 131), (200, 97), (130, 41)])
+@pytest.mark.parametrize("kwargs", [{"sigma_px": 1.7}, {"sigma_px": 0.0, "border_px": 0}, {"sigma_px": 2.2, "stencil": "paper", "max_corner_ratio": 0.3}])
+@pytest.mark.parametrize("min_rows", [64, 2])
+def test_any_thread_count_gives_the_one_thread_bits(shape, kwargs, min_rows, monkeypatch):
+    # min_rows 2: many strips, so that strip boundaries fall on every kind of row
+    monkeypatch.setattr(fast, "_STRIP_MIN_ROWS", min_rows)
+    frames = _frames(shape, seed=shape[0])
+    want = normal_flow_edges(frames, threads=1, **kwargs)  # held: its buffers are never reused
+    assert want.mask.sum() > 100  # a real test: many edge points in every strip
+    for threads in (2, 3, 7):
+        assert len(fast._cell_strips(shape[0] - 1, threads)) > 1
+        _assert_same_bits(normal_flow_edges(frames, threads=threads, **kwargs), want)
+
+
+@needs_numba
+def test_strips_start_on_even_rows_and_cover_the_grid(monkeypatch):
+    monkeypatch.setattr(fast, "_STRIP_MIN_ROWS", 2)
+    for h in (1, 2, 3, 5, 64, 127, 128, 479, 959):
+        for threads in (1, 2, 3, 4, 16):
+            strips = fast._cell_strips(h, threads)
+            assert strips[0][0] == 0 and strips[-1][1] == h
+            assert all(a % 2 == 0 and b > a for a, b in strips)
+            assert all(b == a2 for (_, b), (a2, _) in itertools.pairwise(strips))
+            assert len(strips) <= threads
+
+
+@needs_numba
+def test_a_stream_on_threads_gives_the_one_thread_bits():
+    seq = _frames((190, 75), seed=3) + _frames((190, 75), seed=4)
+    one, three = StreamingNormalFlow(sigma_px=1.5, threads=1), StreamingNormalFlow(sigma_px=1.5, threads=3)
+    for f in seq:
+        a, b = one.push(f), three.push(f)
+        if a is None:
+            assert b is None
+        else:
+            _assert_same_bits(b, a)
+
+
+def test_default_threads_follow_opencv():
+    old = cv2.getNumThreads()
+    try:
+        cv2.setNumThreads(3)
+        assert fast._threads(None) == max(1, cv2.getNumThreads())
+        cv2.setNumThreads(1)
+        assert fast._threads(None) == 1
+    finally:
+        cv2.setNumThreads(old)
+
+
+@pytest.mark.parametrize(("threads", "exc"), [(0, ValueError), (-2, ValueError), (1.5, TypeError), (True, TypeError), ("2", TypeError)])
+def test_bad_thread_counts_are_refused(threads, exc):
+    frames = _frames((20, 24))
+    with pytest.raises(exc, match=f"threads must be an integer >= 1, got {threads!r}"):
+        normal_flow_edges(frames, sigma_px=1.0, threads=threads)
+    with pytest.raises(exc, match="threads must be an integer >= 1"):
+        StreamingNormalFlow(sigma_px=1.0, threads=threads)
+
+
+def test_a_failing_strip_raises_after_every_strip_has_ended():
+    ended = []
+    lock = threading.Lock()
+
+    def strip(i):
+        if i == 1:
+            msg = "strip 1 failed"
+            raise RuntimeError(msg)
+        time.sleep(0.05)
+        with lock:
+            ended.append(i)
+
+    with pytest.raises(RuntimeError, match="strip 1 failed"):
+        fast._run_strips(strip, 4, 3)
+    assert sorted(ended) == [0, 2, 3]
+
+
+@needs_numba
+@pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="needs the fork start method (POSIX)")
+@pytest.mark.filterwarnings("ignore:This process .* is multi-threaded:DeprecationWarning")
+def test_a_forked_child_gets_its_own_pool():
+    # The parent's pool threads do not exist in a forked child: it must not wait on them.
+    frames = _frames((200, 60), seed=9)
+    want = normal_flow_edges(frames, sigma_px=1.5, threads=2)
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_child_run, (frames,)).get(timeout=60)
+    assert got[0] != os.getpid()
+    for x, y in zip(got[1], want):
+        np.testing.assert_array_equal(x, y)
+
+
+def _child_run(frames):
+    return os.getpid(), [np.array(x) for x in normal_flow_edges(frames, sigma_px=1.5, threads=2)]
