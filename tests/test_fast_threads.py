@@ -40,28 +40,36 @@ def _assert_same_bits(got, want):
 @needs_numba
 @pytest.mark.parametrize("shape", [(259, 131), (200, 97), (130, 41)])
 @pytest.mark.parametrize("kwargs", [{"sigma_px": 1.7}, {"sigma_px": 0.0, "border_px": 0}, {"sigma_px": 2.2, "stencil": "paper", "max_corner_ratio": 0.3}])
-@pytest.mark.parametrize("min_rows", [64, 2])
-def test_any_thread_count_gives_the_one_thread_bits(shape, kwargs, min_rows, monkeypatch):
-    # min_rows 2: many strips, so that strip boundaries fall on every kind of row
-    monkeypatch.setattr(fast, "_STRIP_MIN_ROWS", min_rows)
+@pytest.mark.parametrize("min_pixels", [1024, 2])
+def test_any_thread_count_gives_the_one_thread_bits(shape, kwargs, min_pixels, monkeypatch):
+    # small strips on small images; min_pixels 2: strips of two rows, so that strip boundaries fall on every kind of row
+    monkeypatch.setattr(fast, "_STRIP_MIN_PIXELS", min_pixels)
     frames = _frames(shape, seed=shape[0])
     want = normal_flow_edges(frames, threads=1, **kwargs)  # held: its buffers are never reused
     assert want.mask.sum() > 100  # a real test: many edge points in every strip
     for threads in (2, 3, 7):
-        assert len(fast._cell_strips(shape[0] - 1, threads)) > 1
+        assert len(fast._cell_strips(shape[0] - 1, shape[1] - 1, threads)) > 1
         _assert_same_bits(normal_flow_edges(frames, threads=threads, **kwargs), want)
 
 
 @needs_numba
 def test_strips_start_on_even_rows_and_cover_the_grid(monkeypatch):
-    monkeypatch.setattr(fast, "_STRIP_MIN_ROWS", 2)
     for h in (1, 2, 3, 5, 64, 127, 128, 479, 959):
         for threads in (1, 2, 3, 4, 16):
-            strips = fast._cell_strips(h, threads)
+            strips = fast._cell_strips(h, 3, threads)
             assert strips[0][0] == 0 and strips[-1][1] == h
             assert all(a % 2 == 0 and b > a for a, b in strips)
             assert all(b == a2 for (_, b), (a2, _) in itertools.pairwise(strips))
             assert len(strips) <= threads
+    monkeypatch.setattr(fast, "_STRIP_MIN_PIXELS", 2)
+    assert len(fast._cell_strips(959, 3, 16)) == 16
+
+
+def test_small_images_stay_on_one_thread():
+    # waking a thread costs about what a strip of fewer pixels saves
+    assert fast._cell_strips(479, 639, 2) == [(0, 240), (240, 479)]
+    assert fast._cell_strips(479, 639, 8) == [(0, 240), (240, 479)]  # at most two strips of 2**17 px
+    assert fast._cell_strips(199, 639, 4) == [(0, 199)]
 
 
 @needs_numba
@@ -96,11 +104,13 @@ def test_bad_thread_counts_are_refused(threads, exc):
         StreamingNormalFlow(sigma_px=1.0, threads=threads)
 
 
-def test_a_failing_strip_raises_after_every_strip_has_ended():
-    ended = []
+def test_a_failing_strip_raises_once_every_started_strip_has_ended():
+    started, ended = [], []
     lock = threading.Lock()
 
     def strip(i):
+        with lock:
+            started.append(i)
         if i == 1:
             msg = "strip 1 failed"
             raise RuntimeError(msg)
@@ -109,8 +119,29 @@ def test_a_failing_strip_raises_after_every_strip_has_ended():
             ended.append(i)
 
     with pytest.raises(RuntimeError, match="strip 1 failed"):
-        fast._run_strips(strip, 4, 3)
-    assert sorted(ended) == [0, 2, 3]
+        fast._run_strips(strip, 6, 3)
+    assert 1 in started and sorted(ended) == sorted(i for i in started if i != 1)
+    time.sleep(0.1)
+    assert sorted(ended) == sorted(i for i in started if i != 1)  # nothing started after the return
+
+
+def test_the_caller_never_waits_for_a_worker_that_has_not_started():
+    # An idle core can wake later than a strip takes: the caller claims every
+    # strip left and returns, whatever the pool's workers are doing.
+    release = threading.Event()
+    fast._pool(2).submit(release.wait, 10)  # the pool's only worker is busy
+    safety = threading.Timer(5.0, release.set)
+    safety.start()
+    try:
+        runners = []
+        t0 = time.perf_counter()
+        fast._run_strips(lambda i: runners.append(threading.get_ident()), 5, 2)
+        elapsed = time.perf_counter() - t0
+    finally:
+        release.set()
+        safety.cancel()
+    assert runners == [threading.get_ident()] * 5
+    assert elapsed < 1.0
 
 
 @needs_numba

@@ -61,8 +61,10 @@ results are bit-identical. Without numba the numpy/OpenCV path below runs
 
 **Threads** (numba path, ``threads=``, default ``cv2.getNumThreads()``). The
 blurs, the cell-grid pass and the edge-point tests run in row strips of at
-least 64 rows on a shared pool (the calling thread takes one strip), with
-the percentile beside the block tensor's window in between. A strip is
+least 2**17 pixels (a 640 x 480 image: two) on a shared pool, with the
+percentile beside the block tensor's window in between. The calling thread
+claims strips as well, so it never waits for a worker that has not woken
+(an idle core of a VM can take longer to wake than a strip takes). A strip is
 blurred from its rows plus the kernel radius (bit-identical to the whole
 image's ``cv2.sepFilter2D``, which itself runs on one thread), the cell-grid
 pass primes its row ring at the strip's first row (an even one: whole
@@ -269,13 +271,13 @@ class _NbWorkspace(_Pool):
         self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
         self.rows = np.empty(h + 1, np.int64)
         self.tensor, self.read_back = _tensor_buffers(h, w)
-        self._scratch: dict = {}  # per blur strip (threads > 1 only), see _blur_strips
+        self._scratch: dict = {}  # per thread that runs a blur strip (threads > 1 only), see _blur_strips
 
-    def scratch(self, i: int, rows: int) -> np.ndarray:
-        """Float32 rows ``(rows, W)`` of blur strip ``i``'s own buffer (kept; grown when needed)."""
-        buf = self._scratch.get(i)
+    def scratch(self, key: int, rows: int) -> np.ndarray:
+        """Float32 rows ``(rows, W)`` of thread ``key``'s own buffer (kept; grown when needed)."""
+        buf = self._scratch.get(key)
         if buf is None or buf.shape[0] < rows:
-            buf = self._scratch[i] = np.empty((rows, self.shape[1]), np.float32)
+            buf = self._scratch[key] = np.empty((rows, self.shape[1]), np.float32)
         return buf[:rows]
 
 
@@ -677,7 +679,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
     p = k.p
     vn, alpha, mag, mask = ws.outputs()
     w = mag.shape[1]
-    strips = _cell_strips(mag.shape[0], threads)
+    strips = _cell_strips(*mag.shape, threads)
     ends = [0] * len(strips)
     w0, w1, w2 = k.nb_weights
 
@@ -687,20 +689,19 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
 
     _run_strips(dense, len(strips), threads)
     ncand = sum(e - r_lo * w for e, (r_lo, _) in zip(ends, strips))
-    tensor = None
-    if ncand and len(strips) > 1:
-        # the block tensor's window runs beside the percentile
-        tensor = _pool(threads).submit(k.smooth_block_tensor, ws.tensor)
-    try:
-        if p.min_gradient is None:
-            high = _percentile_linear(mag, 99.0) if mag.size else 0.0
-            min_gradient = p.relative_gradient * high
-        else:
-            min_gradient = p.min_gradient
-    finally:
-        T = tensor.result() if tensor is not None else None
+    threshold = [p.min_gradient]
+
+    def percentile_or_tensor(i):
+        if i == 0 and p.min_gradient is None:
+            threshold[0] = p.relative_gradient * (_percentile_linear(mag, 99.0) if mag.size else 0.0)
+        elif i == 1:
+            k.smooth_block_tensor(ws.tensor)
+
+    # the block tensor's window beside the percentile (both on this thread when no worker is awake)
+    _run_strips(percentile_or_tensor, 2 if ncand else 1, threads if len(strips) > 1 else 1)
+    min_gradient = threshold[0]
     if ncand:
-        T = k.smooth_block_tensor(ws.tensor) if T is None else T
+        T = ws.tensor
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
         thr, floor = np.float32(min_gradient), np.float32(_rounding_floor(G1))
         flat_gc, flat_gr, flat_alpha = ws.gc.ravel(), ws.gr.ravel(), alpha.ravel()
@@ -720,7 +721,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
 
 # ------------------------------------------------------------ row strips
 
-_STRIP_MIN_ROWS = 64  # rows per strip at least: below, a thread's hand-off costs more than it saves
+_STRIP_MIN_PIXELS = 1 << 17  # per strip at least: below, waking a thread costs about what it saves (see _cell_strips)
 _pools: dict = {}
 _pools_lock = threading.Lock()
 
@@ -730,13 +731,15 @@ def _threads(threads) -> int:
     return max(1, cv2.getNumThreads()) if threads is None else check_int("threads", threads, 1)
 
 
-def _cell_strips(h: int, threads: int) -> list:
-    """Row strips ``(r_lo, r_hi)`` of an ``h``-row grid for ``threads`` threads, each starting on an even row.
+def _cell_strips(h: int, w: int, threads: int) -> list:
+    """Row strips ``(r_lo, r_hi)`` of an ``h`` x ``w`` grid for ``threads`` threads, each starting on an even row.
 
-    Results do not depend on them: every row's arithmetic is the same in
-    any strip (see :func:`_nb_dense`).
+    Each strip holds at least ``_STRIP_MIN_PIXELS`` (and two rows). Results
+    do not depend on the strips: every row's arithmetic is the same in any
+    strip (see :func:`_nb_dense`).
     """
-    n = max(1, min(int(threads), h // _STRIP_MIN_ROWS))
+    min_rows = max(2, -(-_STRIP_MIN_PIXELS // max(w, 1)))
+    n = max(1, min(int(threads), h // min_rows))
     edges = [0] + [2 * round(i * h / (2 * n)) for i in range(1, n)] + [h]
     return [(a, b) for a, b in itertools.pairwise(edges) if b > a]
 
@@ -766,24 +769,49 @@ if hasattr(os, "register_at_fork"):
 
 
 def _run_strips(fn, n: int, threads: int) -> None:
-    """``fn(i)`` for ``i`` in ``range(n)``: strip 0 on this thread, the others on the pool; returns when all have ended.
+    """``fn(i)`` for every ``i`` in ``range(n)``, on this thread and up to ``threads - 1`` pool workers.
 
-    The kernels release the GIL. Every strip has ended before this returns
-    or raises (they write into the caller's buffers).
+    Strips are claimed one at a time, this thread included, so a worker that
+    wakes late (an idle core can take longer to wake than a strip takes)
+    only finds less work: this thread never waits for a worker that has not
+    started, and the whole is never much slower than on one thread. Returns
+    once every strip has ended (they write into the caller's buffers); a
+    strip's exception is raised then, and strips not yet started are skipped.
     """
     if n <= 1 or threads <= 1:
         for i in range(n):
             fn(i)
         return
-    from concurrent.futures import wait
+    claim = itertools.count()  # next() is atomic under the GIL
+    done = threading.Condition(threading.Lock())
+    state = {"left": n, "error": None}
 
-    futures = [_pool(threads).submit(fn, i) for i in range(1, n)]
-    try:
-        fn(0)
-    finally:
-        wait(futures)
-    for f in futures:
-        f.result()
+    def work():
+        for i in claim:
+            if i >= n:
+                return
+            error = None
+            if state["error"] is None:
+                try:
+                    fn(i)
+                except BaseException as exc:  # noqa: BLE001 - KeyboardInterrupt included: re-raised by the caller
+                    error = exc
+            with done:
+                if error is not None and state["error"] is None:
+                    state["error"] = error
+                state["left"] -= 1
+                if not state["left"]:
+                    done.notify_all()
+
+    pool = _pool(threads)
+    for _ in range(min(threads, n) - 1):
+        pool.submit(work)
+    work()
+    with done:
+        while state["left"]:
+            done.wait()
+    if state["error"] is not None:
+        raise state["error"]
 
 
 def _blur_strips(srcs, dsts, k: _Kernels, threads: int, scratch) -> None:
@@ -791,26 +819,27 @@ def _blur_strips(srcs, dsts, k: _Kernels, threads: int, scratch) -> None:
 
     A strip is smoothed from its rows plus the kernel radius on each side
     (reflected only at the image's own border), so it is bit-identical to
-    the whole image's ``cv2.sepFilter2D``; each strip goes through its own
-    scratch rows (``scratch(i, rows)``) and only its own rows are copied out.
+    the whole image's ``cv2.sepFilter2D``; it goes through scratch rows of
+    the thread that runs it (``scratch(thread id, rows)``) and only its own
+    rows are copied out. Every (image, strip) pair is one task.
     """
     H = srcs[0].shape[0]
-    strips = _cell_strips(H, threads)
+    strips = _cell_strips(H, srcs[0].shape[1], threads)
     if not k.smooth or len(strips) == 1:
         for src, dst in zip(srcs, dsts):
             _blur(src, dst, k)
         return
     R = k.radius
+    tasks = [(src, dst, y0, y1) for src, dst in zip(srcs, dsts) for y0, y1 in strips]
 
     def blur(i):
-        y0, y1 = strips[i]
+        src, dst, y0, y1 = tasks[i]
         a, b = max(0, y0 - R), min(H, y1 + R)
-        tmp = scratch(i, b - a)
-        for src, dst in zip(srcs, dsts):
-            cv2.sepFilter2D(src[a:b], cv2.CV_32F, k.g, k.g, dst=tmp, borderType=cv2.BORDER_REFLECT)
-            dst[y0:y1] = tmp[y0 - a : y1 - a]
+        tmp = scratch(threading.get_ident(), b - a)
+        cv2.sepFilter2D(src[a:b], cv2.CV_32F, k.g, k.g, dst=tmp, borderType=cv2.BORDER_REFLECT)
+        dst[y0:y1] = tmp[y0 - a : y1 - a]
 
-    _run_strips(blur, len(strips), threads)
+    _run_strips(blur, len(tasks), threads)
 
 
 # --------------------------------------------------------------- the core
@@ -989,8 +1018,9 @@ def normal_flow_edges(
         pipelines.
     threads : int, optional
         Threads of the numba path: the blurs, the cell-grid pass and the
-        edge-point tests run in row strips of at least 64 rows, on a shared
-        pool. Results are bit-identical for any thread count. Default
+        edge-point tests run in row strips of at least 2**17 pixels (smaller
+        images run on one thread), on a shared pool. Results are
+        bit-identical for any thread count. Default
         OpenCV's ``cv2.getNumThreads()``, so ``cv2.setNumThreads`` governs it
         (the numpy/OpenCV fallback uses OpenCV's own threads only).
 
