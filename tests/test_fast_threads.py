@@ -11,24 +11,12 @@ import time
 import cv2
 import numpy as np
 import pytest
+from test_fast import _sequence
 
 from nfdepth import fast
 from nfdepth.fast import StreamingNormalFlow, normal_flow_edges
 
 needs_numba = pytest.mark.skipif(not fast.USE_NUMBA, reason="the row strips are the numba path's (numba not installed or NFDEPTH_NO_NUMBA set)")
-
-
-def _frames(shape, seed=0, shift=0.6):
-    """Blocky random texture moving by ``shift`` px per frame along x (cubic warp), float32."""
-    H, W = shape
-    rng = np.random.default_rng(seed)
-    base = cv2.GaussianBlur(rng.random((H + 20, W + 20)), (0, 0), 2.5)
-    base = cv2.GaussianBlur(np.where(base > base.mean(), 210.0, 40.0), (0, 0), 1.0)
-    out = []
-    for t in (-1, 0, 1):
-        M = np.float64([[1, 0, shift * t], [0, 1, 0.3 * shift * t]])
-        out.append(cv2.warpAffine(base, M, (W + 20, H + 20), flags=cv2.INTER_CUBIC)[10:-10, 10:-10].astype(np.float32))
-    return out
 
 
 def _assert_same_bits(got, want):
@@ -44,7 +32,7 @@ def _assert_same_bits(got, want):
 def test_any_thread_count_gives_the_one_thread_bits(shape, kwargs, min_pixels, monkeypatch):
     # small strips on small images; min_pixels 2: strips of two rows, so that strip boundaries fall on every kind of row
     monkeypatch.setattr(fast, "_STRIP_MIN_PIXELS", min_pixels)
-    frames = _frames(shape, seed=shape[0])
+    frames = _sequence(shape, seed=shape[0])
     want = normal_flow_edges(frames, threads=1, **kwargs)  # held: its buffers are never reused
     assert want.mask.sum() > 100  # a real test: many edge points in every strip
     for threads in (2, 3, 7):
@@ -74,7 +62,7 @@ def test_small_images_stay_on_one_thread():
 
 @needs_numba
 def test_a_stream_on_threads_gives_the_one_thread_bits():
-    seq = _frames((190, 75), seed=3) + _frames((190, 75), seed=4)
+    seq = _sequence((190, 75), n=6, seed=3)
     one, three = StreamingNormalFlow(sigma_px=1.5, threads=1), StreamingNormalFlow(sigma_px=1.5, threads=3)
     for f in seq:
         a, b = one.push(f), three.push(f)
@@ -97,7 +85,7 @@ def test_default_threads_follow_opencv():
 
 @pytest.mark.parametrize(("threads", "exc"), [(0, ValueError), (-2, ValueError), (1.5, TypeError), (True, TypeError), ("2", TypeError)])
 def test_bad_thread_counts_are_refused(threads, exc):
-    frames = _frames((20, 24))
+    frames = _sequence((20, 24))
     with pytest.raises(exc, match=f"threads must be an integer >= 1, got {threads!r}"):
         normal_flow_edges(frames, sigma_px=1.0, threads=threads)
     with pytest.raises(exc, match="threads must be an integer >= 1"):
@@ -149,7 +137,7 @@ def test_the_caller_never_waits_for_a_worker_that_has_not_started():
 @pytest.mark.filterwarnings("ignore:This process .* is multi-threaded:DeprecationWarning")
 def test_a_forked_child_gets_its_own_pool():
     # The parent's pool threads do not exist in a forked child: it must not wait on them.
-    frames = _frames((200, 60), seed=9)
+    frames = _sequence((200, 60), seed=9)
     want = normal_flow_edges(frames, sigma_px=1.5, threads=2)
     with multiprocessing.get_context("fork").Pool(1) as pool:
         got = pool.apply_async(_child_run, (frames,)).get(timeout=60)

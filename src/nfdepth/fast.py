@@ -269,7 +269,7 @@ class _NbWorkspace(_Pool):
         self.gr = np.empty((h, w), np.float32)
         # zero-crossing cells (flat cell indices) and their start in each cell row
         self.cand = np.empty(h * w, np.int32 if h * w < 2**31 else np.int64)
-        self.rows = np.empty(h + 1, np.int64)
+        self.rows = np.empty(h, np.int64)
         self.tensor, self.read_back = _tensor_buffers(h, w)
         self._scratch: dict = {}  # per thread that runs a blur strip (threads > 1 only), see _blur_strips
 
@@ -435,14 +435,14 @@ if _njit is not None:
         return n
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi, off):
+    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi):
         """One pass over cell rows ``r_lo .. r_hi - 1``: stencils, I_t, |grad I|, vn, zero crossings, block tensor.
 
         Writes ``gc, gr, mag, vn`` (cells), fills ``alpha`` with NaN and ``mask``
         with False, lists the zero-crossing cells inside the border (flat
-        cell indices, row-major) in ``cand`` from position ``off`` on, with
-        the list's start in each cell row in ``rows``, and returns the
-        list's end. ``T`` (hb, wb, 3) receives the gradient products
+        cell indices, row-major) in ``cand`` from position ``r_lo * w`` on
+        (the strip's own part), with the list's start in each cell row in
+        ``rows``, and returns the list's end. ``T`` (hb, wb, 3) receives the gradient products
         averaged over 2 x 2 blocks of cells (an odd last row or column
         replicated; the four products summed in the reference's order,
         :func:`nfdepth.edges.block_structure_tensor`). ``r_lo`` must be even
@@ -463,7 +463,7 @@ if _njit is not None:
         NG = np.empty((2, W), np.uint8)  # Laplacian < 0
         ZC = np.empty(W, np.uint8)
         inside = h > 2 * b and w > 2 * b
-        ncand = off
+        ncand = r_lo * w
         # prime: rows r_lo - 1, r_lo, r_lo + 1 (clamped)
         for y in range(r_lo - 1, r_lo + 2):
             _comb_row(G0, G1, G2, w0, w1, w2, min(max(y, 0), H - 1), S[(y + 4) % 4])
@@ -596,7 +596,7 @@ if _njit is not None:
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_select(gc, gr, mag, cand, rows, thr, floor, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask, r_lo, r_hi, off, end):
+    def _nb_select(gc, gr, mag, cand, rows, thr, floor, T, r0, r1, wr0, wr1, c0, c1, wc0, wc1, max_ratio, mask, r_lo, r_hi, end):
         """Strong test and corner test at the zero-crossing cells of rows ``r_lo .. r_hi - 1``.
 
         ``cand[off:end]`` and ``rows`` are the list of those rows'
@@ -620,6 +620,7 @@ if _njit is not None:
         read.
         """
         w = gc.shape[1]
+        off = r_lo * w
         # strong candidates (``rows`` then indexes them)
         nstrong = off
         start = off
@@ -685,7 +686,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
 
     def dense(i):
         r_lo, r_hi = strips[i]
-        ends[i] = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor, r_lo, r_hi, r_lo * w)
+        ends[i] = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor, r_lo, r_hi)
 
     _run_strips(dense, len(strips), threads)
     ncand = sum(e - r_lo * w for e, (r_lo, _) in zip(ends, strips))
@@ -709,7 +710,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
         def select(i):
             r_lo, r_hi = strips[i]
             off = r_lo * w
-            n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ws.rows, thr, floor, T, *ws.read_back, float(p.max_corner_ratio), mask, r_lo, r_hi, off, ends[i])
+            n = _nb_select(ws.gc, ws.gr, mag, ws.cand, ws.rows, thr, floor, T, *ws.read_back, float(p.max_corner_ratio), mask, r_lo, r_hi, ends[i])
             # the edge points' gradients are packed at the strip's front of gc/gr (see _nb_select)
             angle = flat_gc[off : off + n]
             np.arctan2(flat_gr[off : off + n], angle, out=angle)
