@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import multiprocessing
 import os
+import signal
 import threading
 import time
 
@@ -111,6 +112,39 @@ def test_a_failing_strip_raises_once_every_started_strip_has_ended():
     assert 1 in started and sorted(ended) == sorted(i for i in started if i != 1)
     time.sleep(0.1)
     assert sorted(ended) == sorted(i for i in started if i != 1)  # nothing started after the return
+
+
+class _Alarm(Exception):
+    pass
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs signal.setitimer (POSIX)")
+def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended():
+    # e.g. Ctrl-C while a worker still writes into the caller's buffers
+    main = threading.get_ident()
+    worker_started = threading.Event()
+    ended = []
+
+    def strip(i):
+        if threading.get_ident() == main:
+            assert worker_started.wait(5.0)  # leaves the other strip to the worker
+            signal.setitimer(signal.ITIMER_REAL, 0.05)  # fires while this thread waits for the worker
+            return
+        worker_started.set()
+        time.sleep(0.3)
+        ended.append(i)
+
+    def alarm(signum, frame):
+        raise _Alarm
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    try:
+        with pytest.raises(_Alarm):
+            fast._run_strips(strip, 2, 2)
+        assert len(ended) == 1  # the worker's strip ended before the call returned
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def test_the_caller_never_waits_for_a_worker_that_has_not_started():

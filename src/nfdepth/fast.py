@@ -810,7 +810,11 @@ def _run_strips(fn, n: int, threads: int) -> None:
     work()
     with done:
         while state["left"]:
-            done.wait()
+            try:
+                done.wait()
+            except BaseException as exc:  # noqa: BLE001 - e.g. KeyboardInterrupt: raised once the running strips have ended
+                if state["error"] is None:
+                    state["error"] = exc
     if state["error"] is not None:
         raise state["error"]
 
