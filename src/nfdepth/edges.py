@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._quantile import percentile
 from ._validate import check_fraction, check_int, check_nonnegative_finite, check_positive_finite
 from .normal_flow import GradientField
 
@@ -236,7 +237,7 @@ def select_edge_points(
     corner_window_px = check_positive_finite("corner_window_px", corner_window_px)
     if min_gradient is None:
         relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
-        high = float(np.percentile(mag, 99.0)) if mag.size else 0.0
+        high = float(percentile(mag, 99.0)) if mag.size else 0.0
         min_gradient = relative_gradient * high
     else:
         min_gradient = check_nonnegative_finite("min_gradient", min_gradient)

@@ -52,8 +52,8 @@ cell-grid pass, ``cv2.sepFilter2D`` for the window), a branch-free compaction of
 the strong candidates and one pass over them: bilinear read-back,
 eigenvalue test (float64, branch-free), with the
 accepted points' gradients packed for NumPy's SIMD float32 ``atan2`` (the
-reference's own; a scalar call costs ~25 ns a point). The percentile's top
-values are collected by a compiled loop. It blurs the three frames separately (3 Gaussian passes), so
+reference's own; a scalar call costs ~25 ns a point). The percentile
+partitions only the values a subsample brackets (:mod:`nfdepth._quantile`). It blurs the three frames separately (3 Gaussian passes), so
 :class:`StreamingNormalFlow` keeps only the smoothed frames and a new frame
 costs one Gaussian pass plus the fused work; streamed and from-scratch
 results are bit-identical. Without numba the numpy/OpenCV path below runs
@@ -103,6 +103,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._quantile import percentile
 from ._validate import as_frames, as_image, check_fraction, check_int, check_nonnegative_finite, check_positive_finite
 from .edges import ROUNDING_GRADIENT, _block_read_back, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
@@ -356,60 +357,6 @@ def _blur(src, dst, k: _Kernels):
     return dst
 
 
-# ---------------------------------------------------------- fast percentile
-
-
-def _percentile_linear(values: np.ndarray, q: float) -> float:
-    """``float(np.percentile(values, q))`` (method "linear"), without sorting all values.
-
-    Selects the two order statistics around the virtual index from the
-    values above a threshold guessed from a subsample (falls back to a full
-    partition when the guess is too high), then interpolates exactly as
-    NumPy's ``_lerp`` does.
-    """
-    a = values.ravel()
-    n = a.size
-    if n < 4096:
-        return float(np.percentile(a, q))
-    qq = np.true_divide(q, 100)
-    vi = n * qq + (1 + qq * (1 - 1 - 1)) - 1  # numpy's _compute_virtual_index, alpha = beta = 1
-    prev = int(np.floor(vi))
-    prev = min(max(prev, 0), n - 1)
-    nxt = min(prev + 1, n - 1)
-    gamma = float(vi - prev)
-    need = n - prev  # number of values >= the prev-th order statistic
-    # Guess a threshold a little below the prev-th order statistic from a
-    # subsample; collect the values >= guess (exact: whenever at least ``need``
-    # values are collected, they hold the top ``need`` order statistics).
-    sample = values[::8, ::8].ravel() if values.ndim == 2 else a[::64]
-    frac = 1.0 - min(1.0, 3.0 * need / n + 64.0 / sample.size)
-    top = None
-    if frac > 0:
-        ks = int(frac * (sample.size - 1))
-        guess = np.partition(sample, ks)[ks]
-        if USE_NUMBA and _njit is not None and a.dtype == np.float32:
-            buf = np.empty(min(n, 8 * need + 1024), np.float32)
-            cnt = _nb_collect(a, guess, buf)
-            if need <= cnt <= buf.size:
-                top = buf[:cnt]
-        else:
-            top = a[a >= guess]
-            if top.size < need:
-                top = None
-    if top is None:
-        top = a.copy()
-    off = n - top.size
-    kth = sorted({prev - off, nxt - off})
-    part = np.partition(top, kth)
-    lo, hi = part[prev - off], part[nxt - off]
-    diff = hi - lo
-    if gamma >= 0.5:
-        res = hi - diff * (1 - gamma)
-    else:
-        res = lo + diff * gamma
-    return float(res)
-
-
 # -------------------------------------------------------------- numba path
 #
 # Everything after the smoothing, fused: one pass over the cell grid
@@ -421,18 +368,6 @@ def _percentile_linear(values: np.ndarray, q: float) -> float:
 # bit-identical across runs, buffers and thread counts.
 
 if _njit is not None:
-
-    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_collect(a, guess, out):
-        """Copy the values ``>= guess`` of ``a`` (1-D) into ``out`` (in order, while room); return how many there are."""
-        n = 0
-        cap = out.size
-        for x in a:
-            if x >= guess:
-                if n < cap:
-                    out[n] = x
-                n += 1
-        return n
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
     def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi):
@@ -694,7 +629,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
 
     def percentile_or_tensor(i):
         if i == 0 and p.min_gradient is None:
-            threshold[0] = p.relative_gradient * (_percentile_linear(mag, 99.0) if mag.size else 0.0)
+            threshold[0] = p.relative_gradient * (float(percentile(mag, 99.0)) if mag.size else 0.0)
         elif i == 1:
             k.smooth_block_tensor(ws.tensor)
 
@@ -894,7 +829,7 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
 
     # Edge points.
     if p.min_gradient is None:
-        high = _percentile_linear(mag, 99.0) if mag.size else 0.0
+        high = float(percentile(mag, 99.0)) if mag.size else 0.0
         min_gradient = p.relative_gradient * high
     else:
         min_gradient = p.min_gradient

@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._quantile import percentile
 from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite, float_dtype
 
 __all__ = [
@@ -303,7 +304,7 @@ def estimate_noise_std(image: np.ndarray) -> float:
     # The response to white noise of std s is normal with std s * sqrt(sum(kernel**2)) = 6 s;
     # E[|X| ; |X| below its 90th percentile] / 0.9 = 2 (phi(0) - phi(z90)) / 0.9 for X ~ N(0, 1).
     mag = np.abs(response).ravel()
-    cut = np.percentile(mag, 90.0)
+    cut = percentile(mag, 90.0)
     kept = mag[mag <= cut]
     return float(np.mean(kept) / (6.0 * _TRIMMED_HALF_NORMAL_MEAN)) if kept.size else 0.0
 

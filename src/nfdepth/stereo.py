@@ -265,6 +265,7 @@ import cv2
 import numpy as np
 
 from ._cost_volume import _box, _match_features, best_disparity
+from ._quantile import median, percentile, percentiles
 from ._validate import _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
@@ -775,7 +776,7 @@ class _ReferenceNodes:
     def flat(self) -> np.ndarray:
         """Pixels whose gradient magnitude is below the level's median (float32 0/1)."""
         mag = np.hypot(self.grad_col, self.grad_row)
-        return (mag < np.median(mag)).astype(np.float32)
+        return (mag < median(mag)).astype(np.float32)
 
     @classmethod
     def of(cls, smoothed_ref: np.ndarray) -> _ReferenceNodes:
@@ -1636,7 +1637,7 @@ def static_stereo(
         raise ValueError(msg)
     levels = 1 if search_range is not None else levels
     noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
-    p1, p99 = np.percentile(views[ref], [1, 99])
+    p1, p99 = percentiles(views[ref], [1, 99])
     spread = float(p99 - p1)
     noise_floor = max(noise, 1e-3 * spread, 1e-6)
 
@@ -1700,8 +1701,8 @@ def static_stereo(
                 # outside the range; the step between measures a scene just beyond it
                 lo, hi = search_range[0] - 2.0 * cost_step_px, search_range[1] + 2.0 * cost_step_px
             else:
-                lo = np.floor(np.percentile(d, 0.5)) - 2.0
-                hi = np.ceil(np.percentile(d, 99.5)) + 2.0
+                lo = np.floor(percentile(d, 0.5)) - 2.0
+                hi = np.ceil(percentile(d, 99.5)) + 2.0
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
