@@ -147,6 +147,57 @@ def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended
         signal.signal(signal.SIGALRM, old)
 
 
+def test_a_failure_sets_stop_so_that_a_long_strip_ends_early():
+    # static stereo's cost-volume strips poll ``stop`` between chunks of candidates
+    stop = threading.Event()
+    main = threading.get_ident()
+    polled = []
+
+    def strip(i):
+        if threading.get_ident() == main:
+            time.sleep(0.05)  # the worker is inside its long strip by now
+            msg = "this strip failed"
+            raise RuntimeError(msg)
+        t0 = time.perf_counter()
+        while not stop.is_set() and time.perf_counter() - t0 < 5.0:
+            time.sleep(0.005)
+        polled.append(time.perf_counter() - t0)
+
+    t0 = time.perf_counter()
+    with pytest.raises(RuntimeError, match="this strip failed"):
+        fast._run_strips(strip, 2, 2, stop=stop)
+    assert stop.is_set() and len(polled) == 1  # the worker's strip saw it and ended before the return
+    assert time.perf_counter() - t0 < 2.0
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs signal.setitimer (POSIX)")
+def test_an_interrupt_while_waiting_sets_stop():
+    stop = threading.Event()
+    main = threading.get_ident()
+    worker_started = threading.Event()
+
+    def strip(i):
+        if threading.get_ident() == main:
+            assert worker_started.wait(5.0)
+            signal.setitimer(signal.ITIMER_REAL, 0.05)  # fires while this thread waits for the worker
+            return
+        worker_started.set()
+        assert stop.wait(5.0)  # a strip that would run for long without it
+
+    def alarm(signum, frame):
+        raise _Alarm
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    try:
+        t0 = time.perf_counter()
+        with pytest.raises(_Alarm):
+            fast._run_strips(strip, 2, 2, stop=stop)
+        assert stop.is_set() and time.perf_counter() - t0 < 2.0
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
 def test_the_caller_never_waits_for_a_worker_that_has_not_started():
     # An idle core can wake later than a strip takes: the caller claims every
     # strip left and returns, whatever the pool's workers are doing.

@@ -39,7 +39,6 @@ from __future__ import annotations
 import itertools
 import math
 import threading
-from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
@@ -301,7 +300,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
     m, step = _window_half(candidates, exclude_px)
     out = [np.empty((h, w), f32) for _ in range(3)]  # d, c_best, c_second
 
-    stop = threading.Event()  # set when the caller is interrupted: the other strips end at their next chunk
+    stop = threading.Event()  # set by _run_strips on a failure or an interrupt
 
     def run_strip(y0, y1):
         # output rows y0 .. y1 - 1 need guided coefficients r rows beyond, and those costs r rows further
@@ -330,20 +329,10 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
             o[y0:y1] = v
 
     strips = _row_strips(h, r)
-    workers = max(1, min(int(threads), len(strips)))
-    if workers == 1:
-        for y0, y1 in strips:
-            run_strip(y0, y1)
-    else:
-        # the kernels (and NumPy's loops of the finish) release the GIL; each strip writes its own rows
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            try:
-                for fut in [pool.submit(run_strip, y0, y1) for y0, y1 in strips]:
-                    fut.result()
-            except BaseException:  # KeyboardInterrupt, a signal turned exception, a failed strip
-                stop.set()
-                pool.shutdown(cancel_futures=True)
-                raise
+    # the kernels (and NumPy's loops of the finish) release the GIL; each strip
+    # writes its own rows; on a failure or an interrupt the running strips end
+    # at their next chunk
+    _fast._run_strips(lambda i: run_strip(*strips[i]), len(strips), int(threads), stop=stop)
     return tuple(out)
 
 

@@ -704,7 +704,7 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pools)
 
 
-def _run_strips(fn, n: int, threads: int) -> None:
+def _run_strips(fn, n: int, threads: int, *, stop: threading.Event | None = None) -> None:
     """``fn(i)`` for every ``i`` in ``range(n)``, on this thread and up to ``threads - 1`` pool workers.
 
     Strips are claimed one at a time, this thread included, so a worker that
@@ -713,6 +713,8 @@ def _run_strips(fn, n: int, threads: int) -> None:
     started, and the whole is never much slower than on one thread. Returns
     once every strip has ended (they write into the caller's buffers); a
     strip's exception is raised then, and strips not yet started are skipped.
+    ``stop``, if given, is set as soon as a strip fails or the caller is
+    interrupted, so that long strips polling it can end early.
     """
     if n <= 1 or threads <= 1:
         for i in range(n):
@@ -735,6 +737,8 @@ def _run_strips(fn, n: int, threads: int) -> None:
             with done:
                 if error is not None and state["error"] is None:
                     state["error"] = error
+                    if stop is not None:
+                        stop.set()
                 state["left"] -= 1
                 if not state["left"]:
                     done.notify_all()
@@ -750,6 +754,8 @@ def _run_strips(fn, n: int, threads: int) -> None:
             except BaseException as exc:  # noqa: BLE001 - e.g. KeyboardInterrupt: raised once the running strips have ended
                 if state["error"] is None:
                     state["error"] = exc
+                    if stop is not None:
+                        stop.set()
     if state["error"] is not None:
         raise state["error"]
 
