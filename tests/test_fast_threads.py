@@ -198,6 +198,30 @@ def test_an_interrupt_while_waiting_sets_stop():
         signal.signal(signal.SIGALRM, old)
 
 
+class _Interrupt(BaseException):  # as KeyboardInterrupt: no Exception
+    pass
+
+
+def test_an_interrupt_wins_over_a_strip_error():
+    # Ctrl-C while numba compiles a kernel in the calling thread: the worker's
+    # call of the half-compiled kernel fails ("no compiled object yet"), and the
+    # user must see the interrupt, not an internal error
+    main = threading.get_ident()
+    worker_failed = threading.Event()
+
+    def strip(i):
+        if threading.get_ident() == main:
+            assert worker_failed.wait(5.0)
+            time.sleep(0.02)  # the worker's error is recorded first
+            raise _Interrupt
+        worker_failed.set()
+        msg = "a consequence of the interrupt"
+        raise RuntimeError(msg)
+
+    with pytest.raises(_Interrupt):
+        fast._run_strips(strip, 2, 2)
+
+
 def test_the_caller_never_waits_for_a_worker_that_has_not_started():
     # An idle core can wake later than a strip takes: the caller claims every
     # strip left and returns, whatever the pool's workers are doing.

@@ -713,8 +713,12 @@ def _run_strips(fn, n: int, threads: int, *, stop: threading.Event | None = None
     started, and the whole is never much slower than on one thread. Returns
     once every strip has ended (they write into the caller's buffers); a
     strip's exception is raised then, and strips not yet started are skipped.
-    ``stop``, if given, is set as soon as a strip fails or the caller is
-    interrupted, so that long strips polling it can end early.
+    An interrupt (an exception that is no ``Exception``: ``KeyboardInterrupt``,
+    the CLI's SIGTERM) wins over a strip's error, which may be its
+    consequence (numba, interrupted while compiling a kernel in this thread,
+    fails the other threads' calls of it). ``stop``, if given, is set as soon
+    as a strip fails or the caller is interrupted, so that long strips
+    polling it can end early.
     """
     if n <= 1 or threads <= 1:
         for i in range(n):
@@ -723,6 +727,13 @@ def _run_strips(fn, n: int, threads: int, *, stop: threading.Event | None = None
     claim = itertools.count()  # next() is atomic under the GIL
     done = threading.Condition(threading.Lock())
     state = {"left": n, "error": None}
+
+    def record(exc):  # holding ``done``
+        old = state["error"]
+        if old is None or (isinstance(old, Exception) and not isinstance(exc, Exception)):
+            state["error"] = exc
+        if stop is not None:
+            stop.set()
 
     def work():
         for i in claim:
@@ -735,10 +746,8 @@ def _run_strips(fn, n: int, threads: int, *, stop: threading.Event | None = None
                 except BaseException as exc:  # noqa: BLE001 - KeyboardInterrupt included: re-raised by the caller
                     error = exc
             with done:
-                if error is not None and state["error"] is None:
-                    state["error"] = error
-                    if stop is not None:
-                        stop.set()
+                if error is not None:
+                    record(error)
                 state["left"] -= 1
                 if not state["left"]:
                     done.notify_all()
@@ -752,10 +761,7 @@ def _run_strips(fn, n: int, threads: int, *, stop: threading.Event | None = None
             try:
                 done.wait()
             except BaseException as exc:  # noqa: BLE001 - e.g. KeyboardInterrupt: raised once the running strips have ended
-                if state["error"] is None:
-                    state["error"] = exc
-                    if stop is not None:
-                        stop.set()
+                record(exc)
     if state["error"] is not None:
         raise state["error"]
 
