@@ -86,3 +86,12 @@ def test_nan_small_and_other_dtypes_are_numpys(backend):
     ints = rng.integers(0, 255, 10_000).astype(np.uint8)
     assert _quantile.percentile(ints, 90.0) == np.percentile(ints, 90.0)
     assert _quantile.median(ints) == np.median(ints)
+
+
+@pytest.mark.parametrize("q", [-1.0, 100.5, float("nan")])
+def test_a_percentile_outside_0_100_is_refused_as_numpy_does(q, backend):
+    a = np.random.default_rng(2).random(10_000)
+    with pytest.raises(ValueError, match="Percentiles must be in the range"):
+        _quantile.percentile(a, q)
+    with pytest.raises(ValueError, match="Percentiles must be in the range"):
+        _quantile.percentiles(a, [1.0, q])

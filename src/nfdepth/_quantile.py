@@ -38,7 +38,7 @@ _EXTREME = 0.05  # a rank this close to either end (as a fraction) takes the bra
 def percentile(values, q: float):
     """``np.percentile(values, q)`` for a Python-number ``q`` (method ``"linear"``), bit for bit."""
     a = np.asanyarray(values)
-    if not _eligible(a):
+    if not _eligible(a) or not 0 <= q <= 100:  # NumPy's own error for a q outside [0, 100] or NaN
         return np.percentile(a, q)
     qq = np.true_divide(q, 100)
     prev, nxt, gamma = _virtual_index(a.size, qq)
@@ -55,7 +55,7 @@ def percentiles(values, qs) -> np.ndarray:
     """``np.percentile(values, qs)`` for a 1-D sequence ``qs`` (float64 interpolation, as NumPy), bit for bit."""
     a = np.asanyarray(values)
     q = np.true_divide(np.asarray(qs, np.float64), 100)
-    if not _eligible(a) or q.ndim != 1:
+    if not _eligible(a) or q.ndim != 1 or not np.all((q >= 0) & (q <= 1)):
         return np.percentile(a, qs)
     lows, highs, gammas = [], [], []
     flat = a.ravel()
@@ -96,11 +96,10 @@ def _eligible(a: np.ndarray) -> bool:
 def _virtual_index(n: int, qq) -> tuple[int, int, float]:
     """NumPy's linear-method neighbours and weight (its virtual index ``(n - 1) * q``)."""
     vi = (n - 1) * qq
-    prev = min(max(int(np.floor(vi)), 0), n - 1)
-    nxt = min(prev + 1, n - 1)
     if vi >= n - 1:
-        prev = nxt = n - 1
-    return prev, nxt, vi - np.floor(vi) if vi < n - 1 else 0.0
+        return n - 1, n - 1, 0.0
+    prev = int(np.floor(vi))
+    return prev, prev + 1, vi - prev
 
 
 def _order_statistics(a: np.ndarray, prev: int, nxt: int):
