@@ -118,12 +118,13 @@ class _Alarm(Exception):
     pass
 
 
-@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs signal.setitimer (POSIX)")
-def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended():
-    # e.g. Ctrl-C while a worker still writes into the caller's buffers
+def _interrupted_while_waiting(worker, **kwargs):
+    """Two strips, ``worker()`` on the pool and an alarm armed by the caller's; ``_run_strips`` must raise the alarm.
+
+    The alarm fires while the caller waits for the worker's strip.
+    """
     main = threading.get_ident()
     worker_started = threading.Event()
-    ended = []
 
     def strip(i):
         if threading.get_ident() == main:
@@ -131,8 +132,7 @@ def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended
             signal.setitimer(signal.ITIMER_REAL, 0.05)  # fires while this thread waits for the worker
             return
         worker_started.set()
-        time.sleep(0.3)
-        ended.append(i)
+        worker()
 
     def alarm(signum, frame):
         raise _Alarm
@@ -140,11 +140,26 @@ def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended
     old = signal.signal(signal.SIGALRM, alarm)
     try:
         with pytest.raises(_Alarm):
-            fast._run_strips(strip, 2, 2)
-        assert len(ended) == 1  # the worker's strip ended before the call returned
+            fast._run_strips(strip, 2, 2, **kwargs)
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, old)
+
+
+needs_setitimer = pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs signal.setitimer (POSIX)")
+
+
+@needs_setitimer
+def test_an_interrupt_while_waiting_is_raised_once_the_running_strips_have_ended():
+    # e.g. Ctrl-C while a worker still writes into the caller's buffers
+    ended = []
+
+    def worker():
+        time.sleep(0.3)
+        ended.append(1)
+
+    _interrupted_while_waiting(worker)
+    assert len(ended) == 1  # the worker's strip ended before the call returned
 
 
 def test_a_failure_sets_stop_so_that_a_long_strip_ends_early():
@@ -170,32 +185,16 @@ def test_a_failure_sets_stop_so_that_a_long_strip_ends_early():
     assert time.perf_counter() - t0 < 2.0
 
 
-@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs signal.setitimer (POSIX)")
+@needs_setitimer
 def test_an_interrupt_while_waiting_sets_stop():
     stop = threading.Event()
-    main = threading.get_ident()
-    worker_started = threading.Event()
 
-    def strip(i):
-        if threading.get_ident() == main:
-            assert worker_started.wait(5.0)
-            signal.setitimer(signal.ITIMER_REAL, 0.05)  # fires while this thread waits for the worker
-            return
-        worker_started.set()
+    def worker():
         assert stop.wait(5.0)  # a strip that would run for long without it
 
-    def alarm(signum, frame):
-        raise _Alarm
-
-    old = signal.signal(signal.SIGALRM, alarm)
-    try:
-        t0 = time.perf_counter()
-        with pytest.raises(_Alarm):
-            fast._run_strips(strip, 2, 2, stop=stop)
-        assert stop.is_set() and time.perf_counter() - t0 < 2.0
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+    t0 = time.perf_counter()
+    _interrupted_while_waiting(worker, stop=stop)
+    assert stop.is_set() and time.perf_counter() - t0 < 2.0
 
 
 class _Interrupt(BaseException):  # as KeyboardInterrupt: no Exception
