@@ -580,6 +580,47 @@ def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
         assert np.mean(np.abs(d_nb - d_np) < 0.1) > 0.99
 
 
+@pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
+@pytest.mark.parametrize("shift", [0.0, 0.5, -0.25, 3.0, -7.75, 38.0, 39.0, -39.0, 39.5, 1e-7, 200.0, -200.0])
+def test_side_cost_kernel_matches_its_definition(shift):
+    """The fused per-view cost (interior and border columns run apart) is the plain definition, bit for bit.
+
+    Views 0 and 2 shifted by -shift and +shift; columns whose sample ``c - s``
+    leaves ``[0, w - 1]`` do not count; a column no view sees gets the fill.
+    Shifts of 39 on a 40 px row sample the last column exactly; 200 miss the row.
+    """
+    from nfdepth._cost_volume import _nb_side_cost
+
+    rng = np.random.default_rng(7)
+    h, w = 6, 40
+    fi = (rng.random((3, h, w)) * 200).astype(np.float32)
+    fg = (rng.random((3, h, w)) * 20).astype(np.float32)
+    guide = rng.random((h, w)).astype(np.float32)
+    f32 = np.float32
+    a1, a2, ti, tg, fill = f32(0.1), f32(0.9), f32(30.0), f32(4.0), f32(6.6)
+    for ks, shifts in (([0], [-shift]), ([2], [shift]), ([0, 2], [-shift, shift])):
+        p, q, cnt = np.empty((h, w), f32), np.empty((h, w), f32), np.empty(w, f32)
+        _nb_side_cost(fi, fg, np.array(ks, np.int64), np.array(shifts, np.float64), 1, a1, a2, ti, tg, fill, guide, p, q, cnt, 0, h)
+        acc = np.zeros((h, w), f32)
+        seen = np.zeros(w, f32)
+        cols = np.arange(w)
+        for k, s in zip(ks, shifts):
+            o = int(np.floor(-s))
+            f = f32(-s - o)
+            inside = (cols.astype(f32) - f32(s) >= 0) & (cols.astype(f32) - f32(s) <= w - 1)
+            i0 = np.clip(cols + o, 0, w - 1)
+            i1 = np.minimum(i0 + 1, w - 1)
+            vi = fi[k][:, i0] * (f32(1) - f) + fi[k][:, i1] * f
+            vg = fg[k][:, i0] * (f32(1) - f) + fg[k][:, i1] * f
+            cost = a1 * np.minimum(np.abs(vi - fi[1]), ti) + a2 * np.minimum(np.abs(vg - fg[1]), tg)
+            acc += np.where(inside, cost, f32(0))
+            seen += inside
+        mean = np.where(seen > 0, acc / np.maximum(seen, f32(1)), fill).astype(f32)
+        np.testing.assert_array_equal(cnt, seen)
+        np.testing.assert_array_equal(p, mean)
+        np.testing.assert_array_equal(q, guide * mean)
+
+
 def test_row_strips_cover_the_image_in_a_power_of_two():
     """The cost volume's strips depend on the height and radius only: contiguous, a power of two, >= the minimum height."""
     from nfdepth._cost_volume import _MIN_STRIP_ROWS, _row_strips
