@@ -366,17 +366,20 @@ if _njit is not None:
     _jit_inline = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
 
     @_jit_inline
-    def _nb_side_cost_clamped(ik, gk, ir, gr, o, f, g0, a1, a2, tau_i, tau_g, acc, c_lo, c_hi):
+    def _nb_view_cost(i0, i1, g0, g1, i_ref, g_ref, w0, f, a1, a2, tau_i, tau_g):
+        """One pixel's truncated cost of a view sampled between its taps (intensities ``i0, i1``, gradients ``g0, g1``; weights ``w0, f``)."""
+        vi = i0 * w0 + i1 * f
+        vg = g0 * w0 + g1 * f
+        return a1 * min(abs(vi - i_ref), tau_i) + a2 * min(abs(vg - g_ref), tau_g)
+
+    @_jit_inline
+    def _nb_side_cost_clamped(ik, gk, ir, gr, o, f, w0, a1, a2, tau_i, tau_g, acc, c_lo, c_hi):
         """Add columns ``c_lo .. c_hi - 1`` of one view's truncated cost to ``acc``, taps clamped to the row (border replicated)."""
         w = ik.size
         for c in range(c_lo, c_hi):
             i0 = min(max(c + o, 0), w - 1)
             i1 = min(i0 + 1, w - 1)
-            vi = ik[i0] * g0 + ik[i1] * f
-            vg = gk[i0] * g0 + gk[i1] * f
-            ci = min(abs(vi - ir[c]), tau_i)
-            cg = min(abs(vg - gr[c]), tau_g)
-            acc[c] += a1 * ci + a2 * cg
+            acc[c] += _nb_view_cost(ik[i0], ik[i1], gk[i0], gk[i1], ir[c], gr[c], w0, f, a1, a2, tau_i, tau_g)
 
     @_jit
     def _nb_side_cost(fi, fg, ks, shifts, ref, a1, a2, tau_i, tau_g, fill, guide, p, q, colcnt, r_lo, r_hi):
@@ -440,11 +443,7 @@ if _njit is not None:
                 ik0, ik1, gk0, gk1 = ik[c0 + o :], ik[c0 + o + 1 :], gk[c0 + o :], gk[c0 + o + 1 :]
                 ir0, gr0, acc0 = ir[c0:], gr[c0:], acc[c0:]
                 for j in range(mid_hi[v] - c0):
-                    vi = ik0[j] * g0 + ik1[j] * f
-                    vg = gk0[j] * g0 + gk1[j] * f
-                    ci = min(abs(vi - ir0[j]), tau_i)
-                    cg = min(abs(vg - gr0[j]), tau_g)
-                    acc0[j] += a1 * ci + a2 * cg
+                    acc0[j] += _nb_view_cost(ik0[j], ik1[j], gk0[j], gk1[j], ir0[j], gr0[j], g0, f, a1, a2, tau_i, tau_g)
                 _nb_side_cost_clamped(ik, gk, ir, gr, o, f, g0, a1, a2, tau_i, tau_g, acc, mid_hi[v], hi[v])
             gd = guide[r]
             pr = p[r - r_lo]
