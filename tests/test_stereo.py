@@ -495,11 +495,11 @@ def test_occluded_side_across_an_edge_along_its_normal():
 
 
 def test_streaming_wta_matches_full_volume():
-    """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones."""
+    """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones (3 px steps: the sub-sample fit too)."""
     from nfdepth._cost_volume import _streaming_wta, _wta_subpixel
 
     rng = np.random.default_rng(0)
-    for n, step in ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3)):
+    for n, step in ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3), (9, 3.0)):
         vol = rng.random((n, 12, 16)).astype(np.float32)
         vol[:, :2] = np.inf  # pixels no view sees
         vol[rng.random(vol.shape) < 0.05] = np.inf
@@ -515,7 +515,11 @@ def test_streaming_wta_matches_full_volume():
 
 @pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
 def test_numba_streaming_wta_matches_full_volume():
-    """The fused winner-take-all (chunks of candidates, state in locals) equals the full-volume one."""
+    """The fused winner-take-all (chunks of candidates, row planes of state) equals the full-volume one.
+
+    Also with costs on a 1/8 grid, whose ties the first candidate wins, and
+    with a window of one slice (``m = 1``, 3 px steps) or chunks of one.
+    """
     from nfdepth._cost_volume import (
         _nb_wta_chunk,
         _nb_wta_result,
@@ -525,8 +529,11 @@ def test_numba_streaming_wta_matches_full_volume():
     )
 
     rng = np.random.default_rng(1)
-    for n, step, k in ((40, 0.5, 8), (7, 0.5, 3), (2, 0.5, 8), (1, 0.5, 8), (30, 0.7, 4), (25, 0.3, 8)):
+    cases = ((40, 0.5, 8), (7, 0.5, 3), (2, 0.5, 8), (1, 0.5, 8), (30, 0.7, 4), (25, 0.3, 8), (9, 3.0, 4), (6, 0.5, 1))
+    for (n, step, k), ties in itertools.product(cases, (False, True)):
         vol = rng.random((n, 12, 16)).astype(np.float32)
+        if ties:
+            vol = np.round(vol * 8) / 8
         vol[:, :2] = np.inf
         vol[rng.random(vol.shape) < 0.05] = np.inf
         cand = np.arange(n) * step + 1.0
@@ -536,8 +543,8 @@ def test_numba_streaming_wta_matches_full_volume():
         m, step = _window_half(cand, 1.0)
         idx, state = _nb_wta_state(vol.shape[1:], m)
         for j in range(0, n, k):
-            chunk = np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, -1))
-            _nb_wta_chunk(chunk, chunk.shape[2], j, m, idx, state)
+            chunk = np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, 1))
+            _nb_wta_chunk(chunk, chunk.shape[1], j, m, idx, state)
         d_s, c0_s, c2_s = _nb_wta_result(idx, state, cand, step, m, 1.0)
         np.testing.assert_array_equal(d_s, d)
         np.testing.assert_array_equal(c0_s, c0)

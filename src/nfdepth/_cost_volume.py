@@ -21,8 +21,9 @@ sums):
   passes over both sides at once -- the guided filter's first box sums with
   its coefficients, the second box sums with the better side's output -- as
   running sums in float64 (``cv2.boxFilter``'s own accumulator type), then the
-  winner-take-all update over chunks of candidates, the per-pixel state
-  kept in locals across a chunk. The image is cut into row strips fixed by
+  winner-take-all update over chunks of candidates: slice by slice, its
+  per-pixel state (planes along each row) in branch-free loops that numba
+  vectorises, and the sub-sample fit in one more kernel. The image is cut into row strips fixed by
   its height (:func:`_row_strips`), each with a halo of twice the box
   radius, that run on ``threads`` threads (the kernels release the GIL), so
   the result does not depend on the thread count. Results agree with the reference to
@@ -160,17 +161,21 @@ def _v_fit(idx, c0, cm, cp, candidates, step):
 
 
 def _window_half(candidates, exclude_px):
-    """``m``: slices at least ``m`` from the winner are always more than ``exclude_px`` from its sub-sample position."""
+    """``m``: slices at least ``m`` from the winner are always more than ``exclude_px`` from its sub-sample position.
+
+    At least 2, so that the window around the winner holds both neighbours
+    of its sub-sample fit (steps over twice ``exclude_px`` would give 1).
+    """
     step = _candidate_step(candidates)
-    return int(np.floor((exclude_px + 0.5 * step) / step)) + 1, step
+    return max(2, int(np.floor((exclude_px + 0.5 * step) / step)) + 1), step
 
 
 def _wta_finish(idx, best, win, far, candidates, step, m, exclude_px):
     """Sub-sample winner and uniqueness cost from the streamed state (see :func:`_streaming_wta`)."""
     n = len(candidates)
     cand32 = np.asarray(candidates, np.float32)
-    cm = np.where(idx > 0, win[m - 2], best) if m > 1 else best
-    cp = np.where(idx < n - 1, win[m], best) if m > 1 else best
+    cm = np.where(idx > 0, win[m - 2], best)  # m >= 2 (_window_half)
+    cp = np.where(idx < n - 1, win[m], best)
     d = _v_fit(idx, best, cm, cp, candidates, step)
     c_second = far.copy()
     for k in range(-(m - 1), m):
@@ -312,13 +317,13 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         p, q = np.empty((2, yq - yp, w), f32), np.empty((2, yq - yp, w), f32)
         a, b = np.empty((2, yb - ya, w), f32), np.empty((2, yb - ya, w), f32)
         colcnt = np.empty((2, w), f32)
-        # candidates j0 .. j0 + K - 1, interleaved per pixel; one buffer, refilled
-        buf = np.empty((y1 - y0, w, min(_CHUNK, n)), f32)
+        # candidates j0 .. j0 + K - 1, one row plane each; one buffer, refilled
+        buf = np.empty((y1 - y0, min(_CHUNK, n), w), f32)
         idx, state = _nb_wta_state((y1 - y0, w), m)  # the strip's own (first touched by its thread)
-        for j0 in range(0, n, buf.shape[2]):
+        for j0 in range(0, n, buf.shape[1]):
             if stop.is_set():
                 return
-            count = min(buf.shape[2], n - j0)
+            count = min(buf.shape[1], n - j0)
             for jj in range(count):
                 for si, ks in enumerate(sides):
                     _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p[si], q[si], colcnt[si], yp, yq)
@@ -342,16 +347,18 @@ def _window_rows(y, n, r):
 
 
 def _nb_wta_state(shape, m):
-    """Winner index and the per-pixel state of :func:`_nb_wta_chunk`, initialised."""
-    # per-pixel state, interleaved (planes 300 x 4 KiB apart alias in the cache):
-    # best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
-    return np.zeros(shape, np.int32), np.full((*shape, 3 + (2 * m - 1) + m), np.inf, np.float32)
+    """Winner index and the per-row state planes of :func:`_nb_wta_chunk`, initialised."""
+    # per row: best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
+    h, w = shape
+    return np.zeros(shape, np.int32), np.full((h, 3 + (2 * m - 1) + m, w), np.inf, np.float32)
 
 
 def _nb_wta_result(idx, state, candidates, step, m, exclude_px):
-    """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (see :func:`_wta_finish`)."""
-    win = [state[:, :, 3 + k] for k in range(2 * m - 1)]
-    return _wta_finish(idx, state[:, :, 0].copy(), win, state[:, :, 2], candidates, step, m, exclude_px)
+    """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (as :func:`_wta_finish`)."""
+    out = [np.empty(idx.shape, np.float32) for _ in range(3)]
+    # float32 as NumPy computes _wta_finish: a Python float step and exclude_px are weak scalars
+    _nb_wta_finish(idx, state, np.asarray(candidates, np.float32), np.float32(step), m, np.float32(exclude_px), *out)
+    return tuple(out)
 
 
 def _box_index(n, r):
@@ -553,7 +560,7 @@ if _njit is not None:
 
     @_jit
     def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, y_lo, y_hi, src_off, two):
-        """The better side's guided-filter output ``box(a) guide + box(b)`` (inf in columns its views miss) into ``out[:, :, plane]``.
+        """The better side's guided-filter output ``box(a) guide + box(b)`` (inf in columns its views miss) into ``out[:, plane]``.
 
         Both sides in one loop (as :func:`_nb_box_coeffs`; side 1 only if
         ``two``); side 1 wins only where its cost is lower. Image rows ``y_lo .. y_hi - 1`` (row ``y -
@@ -568,7 +575,7 @@ if _njit is not None:
             sa0, sb0 = _nb_row_start(cola0, colb0, init_c)
             sa1, sb1 = _nb_row_start(cola1, colb1, init_c) if two else (0.0, 0.0)
             gr = guide[y]
-            orow = out[y - y_lo]
+            orow = out[y - y_lo, plane]
             for x in range(w):
                 g = gr[x]
                 v = np.float32(sa0 * inv_area) * g + np.float32(sb0 * inv_area)
@@ -586,64 +593,107 @@ if _njit is not None:
                         v = v1
                     sa1 += cola1[xa] - cola1[xs]
                     sb1 += colb1[xa] - colb1[xs]
-                orow[x, plane] = v
+                orow[x] = v
             if y + 1 < y_hi:
                 _nb_columns_step_sides(a, b, add_r[y] - src_off, sub_r[y] - src_off, cola0, colb0, cola1, colb1, two)
 
     @_jit
     def _nb_wta_chunk(chunk, count, j0, m, idx, state):
-        """Winner-take-all update over slices ``j0 .. j0 + count - 1`` (``chunk[:, :, :count]``), as :func:`_streaming_wta`.
+        """Winner-take-all update over slices ``j0 .. j0 + count - 1`` (``chunk[:, :count]``), as :func:`_streaming_wta`.
 
-        ``state[r, c]`` holds the pixel's best cost, prefix minimum (slices
-        ``0 .. j - m``), far minimum, the ``2 m - 1`` costs around the winner
-        and the ring of the last ``m`` slices; it is loaded once per chunk and
-        kept in locals across it. Ring slots are tabulated per slice.
+        ``state[r]`` holds planes of the row's best cost, prefix minimum
+        (slices ``0 .. j - m``), far minimum, the ``2 m - 1`` costs around the
+        winner and the ring of the last ``m`` slices (slice ``j`` in plane
+        ``j % m``). Slice by slice, each plane is updated along the row in a
+        branch-free loop that numba vectorises: first the window (whose
+        update reads the winner before this slice), then the rest.
         """
-        h, w, _ = chunk.shape
+        h = chunk.shape[0]
+        w = chunk.shape[2]
         inf = np.float32(np.inf)
         nw = 2 * m - 1
-        o_win = 3
-        o_ring = 3 + nw
-        # slot[jq, k] = ring slot of slice j0 + jq - k (k = 0 .. m - 1; -1 before slice 0)
-        slot = np.empty((count, m), np.int64)
-        for jq in range(count):
-            for k in range(m):
-                jj = j0 + jq - k
-                slot[jq, k] = jj % m if jj >= 0 else -1
         for r in range(h):
+            st = state[r]
+            ir = idx[r]
+            bst = st[0]
+            pr = st[1]
+            fr = st[2]
+            for jq in range(count):
+                j = j0 + jq
+                cost = chunk[r, jq]
+                for e in range(nw):
+                    win = st[3 + e]
+                    k = e - (m - 1)  # win holds slice idx + k
+                    # every value loaded before the choice, so that the loops are branch-free
+                    if k < 0 and j + k < 0:  # a new winner's neighbour before slice 0
+                        for c in range(w):
+                            old = win[c]
+                            win[c] = inf if cost[c] < bst[c] else old
+                    elif k < 0:  # a new winner's earlier neighbours come from the ring
+                        src = st[3 + nw + (j + k) % m]
+                        for c in range(w):
+                            s_c = src[c]
+                            old = win[c]
+                            win[c] = s_c if cost[c] < bst[c] else old
+                    elif k == 0:
+                        for c in range(w):
+                            cv = cost[c]
+                            old = win[c]
+                            win[c] = cv if cv < bst[c] else old
+                    else:  # a new winner's later neighbours are unknown; a kept winner's are filled in
+                        for c in range(w):
+                            cv = cost[c]
+                            old = win[c]
+                            kept = cv if j - ir[c] == k else old
+                            win[c] = inf if cv < bst[c] else kept
+                ring = st[3 + nw + j % m]  # slice j - m, then slice j
+                if j >= m:
+                    for c in range(w):
+                        old = ring[c]
+                        p_c = pr[c]
+                        pr[c] = min(p_c, old)
+                for c in range(w):
+                    cv = cost[c]
+                    b_c = bst[c]
+                    i_c = ir[c]
+                    f = fr[c]
+                    p_c = pr[c]
+                    new = cv < b_c
+                    far = cv if (j - i_c >= m) & (cv < f) else f
+                    fr[c] = p_c if new else far
+                    bst[c] = cv if new else b_c
+                    ir[c] = j if new else i_c
+                    ring[c] = cv
+
+    @_jit
+    def _nb_wta_finish(idx, state, cand32, step, m, exclude, d, c_best, c_second):
+        """:func:`_wta_finish` of the state of :func:`_nb_wta_chunk` into ``d``, ``c_best``, ``c_second``, with its float32 arithmetic."""
+        h, w = idx.shape
+        n = cand32.size
+        half = np.float32(0.5)
+        for r in range(h):
+            st = state[r]
             for c in range(w):
-                st = state[r, c]
-                cv = chunk[r, c]
                 i = idx[r, c]
-                bst = st[0]
-                pr = st[1]
-                fr = st[2]
-                for jq in range(count):
-                    j = j0 + jq
-                    cost = cv[jq]
-                    s0 = o_ring + slot[jq, 0]
-                    if j >= m:
-                        old = st[s0]  # slice j - m
-                        if old < pr:
-                            pr = old
-                    st[s0] = cost
-                    if cost < bst:
-                        i = j
-                        bst = cost
-                        st[o_win + m - 1] = cost
-                        for k in range(1, m):
-                            sk = slot[jq, k]
-                            st[o_win + m - 1 - k] = st[o_ring + sk] if sk >= 0 else inf
-                            st[o_win + m - 1 + k] = inf
-                        fr = pr
-                    else:
-                        rel = j - i
-                        if rel >= m:
-                            if cost < fr:
-                                fr = cost
-                        elif rel >= 1:
-                            st[o_win + m - 1 + rel] = cost
-                idx[r, c] = i
-                st[0] = bst
-                st[1] = pr
-                st[2] = fr
+                c0 = st[0, c]
+                cm = st[3 + m - 2, c] if i > 0 else c0
+                cp = st[3 + m, c] if i < n - 1 else c0
+                # _v_fit: equiangular fit, NaN-propagating maximum, nan_to_num, clip
+                slope = (cm if (math.isnan(cm) or cm > cp) else cp) - c0
+                off = np.float32(0.0)
+                if i > 0 and i < n - 1 and slope > 0:
+                    off = half * (cm - cp) / slope
+                    if math.isnan(off):
+                        off = np.float32(0.0)
+                off = min(max(off, -half), half)
+                dv = cand32[i] + off * step
+                d[r, c] = dv
+                c_best[r, c] = c0
+                # np.minimum over the far window entries (NaN-propagating)
+                c2 = st[2, c]
+                for k in range(-(m - 1), m):
+                    jj = min(max(i + k, 0), n - 1)
+                    if abs(cand32[jj] - dv) > exclude and i + k >= 0 and i + k < n:
+                        v = st[3 + m - 1 + k, c]
+                        c2 = v if not math.isnan(c2) and (math.isnan(v) or v < c2) else c2
+                c_second[r, c] = c2
