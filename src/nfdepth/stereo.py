@@ -840,14 +840,18 @@ _TILE = 1024  # patches per tile row (cv2.remap needs fewer than 32767 columns)
 
 
 class _EdgePatches:
-    """4 x 4 node patches around pixels ``(rows, cols)``, each warped by its own constant column shift.
+    """2 x 4 node patches around pixels ``(rows, cols)``, each warped by its own constant column shift.
 
-    The patches are tiled into a ``(4 R, 4 C)`` image (``C = _TILE``); the
-    centre cell of patch ``i`` is cell ``[4 (i // C) + 1, 4 (i % C) + 1]`` of
-    its gradient field, and the stencil of that cell reads only its own patch.
-    The row map is built once; each :meth:`sample` builds the column map.
+    Node rows ``r -/+ 1/2``, columns ``c - 3/2 .. c + 3/2``: the centre
+    cell's two node rows and the four columns of its matched column
+    difference, all that its stencil reads. The patches are tiled into a
+    ``(2 R, 4 C)`` image (``C = _TILE``); the centre cell of patch ``i`` is
+    cell ``[2 (i // C), 4 (i % C) + 1]`` of its gradient field, and the
+    stencil of that cell reads only its own patch. The row map is built
+    once; each :meth:`sample` builds the column map.
     """
 
+    _ROW_OFFS = np.array([-0.5, 0.5], np.float32)
     _OFFS = np.array([-1.5, -0.5, 0.5, 1.5], np.float32)
 
     def __init__(self, rows, cols):
@@ -857,10 +861,10 @@ class _EdgePatches:
         self.pc = np.zeros(self.n_rows * _TILE, np.float32)
         pr[: self.n], self.pc[: self.n] = rows, cols
         pr = pr.reshape(self.n_rows, _TILE)
-        self.map_y = np.empty((self.n_rows, 4, _TILE, 4), np.float32)
-        np.add(pr[:, None, :, None], self._OFFS[None, :, None, None], out=self.map_y)
-        self.map_y = self.map_y.reshape(4 * self.n_rows, 4 * _TILE)
-        self.map_x = np.empty((self.n_rows, 4, _TILE, 4), np.float32)
+        self.map_y = np.empty((self.n_rows, 2, _TILE, 4), np.float32)
+        np.add(pr[:, None, :, None], self._ROW_OFFS[None, :, None, None], out=self.map_y)
+        self.map_y = self.map_y.reshape(2 * self.n_rows, 4 * _TILE)
+        self.map_x = np.empty((self.n_rows, 2, _TILE, 4), np.float32)
 
     def sample(self, image, shift):
         """``(patch, inside)``: the tiled patches of ``image`` sampled at columns ``c - shift``; whether each stays in the image."""
@@ -868,7 +872,7 @@ class _EdgePatches:
         ps[: self.n] = shift
         centre = (self.pc - ps).reshape(self.n_rows, _TILE)
         np.add(centre[:, None, :, None], self._OFFS[None, None, None, :], out=self.map_x)
-        patch = cv2.remap(image, self.map_x.reshape(4 * self.n_rows, 4 * _TILE), self.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        patch = cv2.remap(image, self.map_x.reshape(2 * self.n_rows, 4 * _TILE), self.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         w = image.shape[1]
         c = centre.ravel()[: self.n]
         inside = (c + self._OFFS[0] >= -0.5) & (c + self._OFFS[-1] <= w - 0.5)
@@ -879,20 +883,20 @@ def _centre_col_gradient(patch: np.ndarray, n: int) -> np.ndarray:
     """The matched stencil's ``I_col`` of the centre cell of each tiled patch (see :class:`_EdgePatches`).
 
     The arithmetic of :func:`nfdepth.normal_flow.gradients` at that cell (its
-    four-point column difference on node rows 1 and 2, averaged), written
-    out for the patch's own 4 x 4 nodes: the general difference pads and
+    four-point column difference on its two node rows, averaged), written
+    out for the patch's own 2 x 4 nodes: the general difference pads and
     computes every column, 13 times slower here.
     """
-    p = patch.reshape(patch.shape[0] // 4, 4, patch.shape[1] // 4, 4)
-    dc1 = _MATCHED_NEAR * (p[:, 1, :, 2] - p[:, 1, :, 1]) + _MATCHED_WIDE * (p[:, 1, :, 3] - p[:, 1, :, 0])
-    dc2 = _MATCHED_NEAR * (p[:, 2, :, 2] - p[:, 2, :, 1]) + _MATCHED_WIDE * (p[:, 2, :, 3] - p[:, 2, :, 0])
+    p = patch.reshape(patch.shape[0] // 2, 2, patch.shape[1] // 4, 4)
+    dc1 = _MATCHED_NEAR * (p[:, 0, :, 2] - p[:, 0, :, 1]) + _MATCHED_WIDE * (p[:, 0, :, 3] - p[:, 0, :, 0])
+    dc2 = _MATCHED_NEAR * (p[:, 1, :, 2] - p[:, 1, :, 1]) + _MATCHED_WIDE * (p[:, 1, :, 3] - p[:, 1, :, 0])
     return (0.5 * (dc1 + dc2)).ravel()[:n]
 
 
 def _centre_cell_mean(patch: np.ndarray, n: int) -> np.ndarray:
     """Mean of the centre cell's four nodes of each tiled patch."""
-    p = patch.reshape(patch.shape[0] // 4, 4, patch.shape[1] // 4, 4)
-    return (0.25 * (p[:, 1, :, 1] + p[:, 1, :, 2] + p[:, 2, :, 1] + p[:, 2, :, 2])).ravel()[:n]
+    p = patch.reshape(patch.shape[0] // 2, 2, patch.shape[1] // 4, 4)
+    return (0.25 * (p[:, 0, :, 1] + p[:, 0, :, 2] + p[:, 1, :, 1] + p[:, 1, :, 2])).ravel()[:n]
 
 
 def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations, offsets=None):
