@@ -624,28 +624,19 @@ if _njit is not None:
                 for e in range(nw):
                     win = st[3 + e]
                     k = e - (m - 1)  # win holds slice idx + k
-                    # every value loaded before the choice, so that the loops are branch-free
-                    if k < 0 and j + k < 0:  # a new winner's neighbour before slice 0
-                        for c in range(w):
-                            old = win[c]
-                            win[c] = inf if cost[c] < bst[c] else old
-                    elif k < 0:  # a new winner's earlier neighbours come from the ring
-                        src = st[3 + nw + (j + k) % m]
-                        for c in range(w):
-                            s_c = src[c]
-                            old = win[c]
-                            win[c] = s_c if cost[c] < bst[c] else old
-                    elif k == 0:
-                        for c in range(w):
-                            cv = cost[c]
-                            old = win[c]
-                            win[c] = cv if cv < bst[c] else old
-                    else:  # a new winner's later neighbours are unknown; a kept winner's are filled in
-                        for c in range(w):
-                            cv = cost[c]
-                            old = win[c]
-                            kept = cv if j - ir[c] == k else old
-                            win[c] = inf if cv < bst[c] else kept
+                    # a new winner's window: its earlier slices from the ring (inf before
+                    # slice 0), itself, its later ones unknown (inf); a kept winner's later
+                    # slices are filled in as they come
+                    src = cost if k == 0 else st[3 + nw + (j + k) % m]
+                    known = k == 0 or (k < 0 and j + k >= 0)
+                    later = k > 0
+                    for c in range(w):
+                        # every value loaded before the choice, so that the loop is branch-free
+                        cv = cost[c]
+                        s_c = src[c]
+                        old = win[c]
+                        kept = cv if later and j - ir[c] == k else old
+                        win[c] = (s_c if known else inf) if cv < bst[c] else kept
                 ring = st[3 + nw + j % m]  # slice j - m, then slice j
                 if j >= m:
                     for c in range(w):
