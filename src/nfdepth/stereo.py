@@ -264,6 +264,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from . import _view_fit
+from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._validate import _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_view_index, float_dtype
@@ -762,6 +764,17 @@ def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
     return out
 
 
+def _occlusion_weights_stacked(diffs, inside, floor, window_px):
+    """:func:`_occlusion_weights` of the views stacked along axis 0 (the reference left out), compiled (bit-identical)."""
+    energy = np.empty_like(diffs)
+    for j, diff in enumerate(diffs):
+        energy[j] = _blur(diff * diff, window_px)
+    out = np.empty_like(diffs)
+    k = diffs.shape[0]
+    _view_fit._nb_occlusion_weights(energy.reshape(k, -1), inside.reshape(k, -1), np.float32(floor), out.reshape(k, -1))
+    return out
+
+
 @dataclass
 class _ReferenceNodes:
     """The node grid of a pyramid level, the reference sampled on it and its cell gradients."""
@@ -793,40 +806,66 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, reference, offset_win
     ``reference``: the level's :class:`_ReferenceNodes` (of ``smoothed[ref]``).
     ``offset_window_px > 0``: remove each view's :func:`_photometric_offsets`
     from its difference before the fit (the occlusion weights are then
-    recomputed from the corrected differences).
+    recomputed from the corrected differences). With numba
+    (:data:`nfdepth.fast.USE_NUMBA`) the pair stencils, the weights' per-pixel
+    part and the fit run as compiled kernels (:mod:`nfdepth._view_fit`) on
+    the views stacked, bit-identical to the NumPy functions used otherwise.
     """
     h, w = d_pix.shape
     d_nodes = _nodes_from_pixels(d_pix).astype(np.float32)
     cols, map_y, ref_nodes = reference.cols, reference.map_y, reference.nodes
     n = len(smoothed)
+    views = [k for k in range(n) if k != ref]
+    compiled = _fast.USE_NUMBA and _view_fit._njit is not None
+    # per view (reference left out), stacked for the compiled fit; the lists
+    # (None at the reference) are views of these for the NumPy fit
+    stack_d, stack_in = np.empty((2, len(views), h, w), np.float32)
+    stack_gc, stack_gr = np.empty((2, len(views), h, w), np.float32) if compiled else (None, None)
     diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
-    for k in range(n):
-        if k == ref:
-            continue
+    for j, k in enumerate(views):
         map_x = (cols - t[k] * d_nodes).astype(np.float32)
         warped = cv2.remap(smoothed[k], map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         inside_nodes = (map_x >= -0.5) & (map_x <= w - 0.5)
-        inside[k] = (inside_nodes[:-1, :-1] & inside_nodes[:-1, 1:] & inside_nodes[1:, :-1] & inside_nodes[1:, 1:]).astype(np.float32)
+        inside[k] = stack_in[j]
+        np.logical_and(inside_nodes[:-1, :-1] & inside_nodes[:-1, 1:], inside_nodes[1:, :-1] & inside_nodes[1:, 1:], out=inside[k], casting="unsafe")
         # Paper section 3.1 stencil on the pair (reference, view k), as
         # gradients([ref_nodes, warped]) with the reference's half cached:
         # grad_t * 1 = cell mean of W_k - W_ref
-        gc_k, gr_k = _cell_gradient(warped, True)
-        diffs[k] = _cell_mean(warped - ref_nodes)
-        gcs[k] = 0.5 * (reference.grad_col + gc_k)
-        grs[k] = 0.5 * (reference.grad_row + gr_k)
-    weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px)
+        diffs[k] = stack_d[j]
+        if compiled:
+            _view_fit._nb_pair_stencil(warped, ref_nodes, _STENCIL_NEAR, _STENCIL_WIDE, stack_gc[j], stack_gr[j], diffs[k])
+        else:
+            gc_k, gr_k = _cell_gradient(warped, True)
+            diffs[k][...] = _cell_mean(warped - ref_nodes)
+            gcs[k] = 0.5 * (reference.grad_col + gc_k)
+            grs[k] = 0.5 * (reference.grad_row + gr_k)
+
+    def occlusion_weights():
+        if not compiled:
+            return None, _occlusion_weights(t, ref, diffs, inside, floor, window_px)
+        stack_w = _occlusion_weights_stacked(stack_d, stack_in, floor, window_px)
+        return stack_w, [None if k == ref else stack_w[views.index(k)] for k in range(n)]
+
+    stack_w, weights = occlusion_weights()
     offsets = None
     if offset_window_px > 0:
         offsets = _photometric_offsets(diffs, weights, reference.flat, offset_window_px)
-        diffs = [None if o is None else diff - o for diff, o in zip(diffs, offsets)]
-        weights = _occlusion_weights(t, ref, diffs, inside, floor, window_px)
+        for k, o in enumerate(offsets):
+            if o is not None:
+                diffs[k] -= o  # in place: the stacked differences follow
+        stack_w, weights = occlusion_weights()
+    if compiled:
+        out = np.empty((6, h, w), np.float32)
+        slope, s_tt, chi2, sum_m, grad_col, grad_row = out
+        flat = [a.reshape(len(views), -1) for a in (stack_d, stack_w, stack_gc, stack_gr)]
+        tk = np.array([t[k] for k in views], np.float32)
+        _view_fit._nb_fit(tk, *flat, reference.grad_col.ravel(), reference.grad_row.ravel(), *out.reshape(6, -1))
+        return _Measurement(slope, grad_col, grad_row, s_tt, chi2, sum_m - 2.0, sum_m, ref_nodes, weights, offsets)
     slope, s_tt, chi2, sum_m = _regress(t, ref, diffs, weights)
     wsum = np.zeros((h, w), np.float32)
     gc = np.zeros((h, w), np.float32)
     gr = np.zeros((h, w), np.float32)
-    for k in range(n):
-        if k == ref:
-            continue
+    for k in views:
         wsum += weights[k]
         gc += weights[k] * gcs[k]
         gr += weights[k] * grs[k]
@@ -939,6 +978,8 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations, offsets
         result = (d, gcol, s_tt, chi2, sum_m - 2.0, sum_m)
     return result
 
+
+_STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WIDE)  # the matched stencil's weights as its float32 arithmetic uses them
 
 _MIN_SIZE_PX = 3  # smallest view side: the 2 x 2 cell stencils and the edge test need 3 px
 
