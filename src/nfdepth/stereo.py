@@ -275,6 +275,9 @@ from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_grad
 
 __all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background"]
 
+# The matched stencil's weights as its float32 arithmetic uses them (the compiled pair stencil).
+_STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WIDE)
+
 # RMS over the sub-sample phase of the cost-volume winner's bias, in candidate
 # steps: the equiangular fit and the linear interpolation of the shifted views
 # lock the estimate toward the candidates (pixel locking). Measured on
@@ -982,8 +985,6 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations, offsets
         result = (d, gcol, s_tt, chi2, sum_m - 2.0, sum_m)
     return result
 
-
-_STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WIDE)  # the matched stencil's weights as its float32 arithmetic uses them
 
 _MIN_SIZE_PX = 3  # smallest view side: the 2 x 2 cell stencils and the edge test need 3 px
 
