@@ -255,6 +255,22 @@ def test_cli_disparity_range(plane_files, tmp_path, capsys):
     np.testing.assert_array_equal(read_pfm(out), lib.disparity)
 
 
+def test_cli_cost_step(plane_files, tmp_path, capsys):
+    """`nfdepth stereo ... --cost-step-px PX` is the library's ``cost_step_px`` (and changes the map)."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_image, read_pfm
+
+    out = tmp_path / "d.pfm"
+    code = main(["stereo", *plane_files, "--cost-step-px", "1", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    views = [read_image(p) for p in plane_files]
+    lib = static_stereo(views, reference=1, cost_step_px=1.0)
+    np.testing.assert_array_equal(read_pfm(out), lib.disparity)
+    default = static_stereo(views, reference=1)
+    assert not np.array_equal(default.disparity, lib.disparity, equal_nan=True)
+
+
 def test_cli_bad_disparity_range_before_reading_the_views(tmp_path, capsys):
     """A bad range is a usage error, found before any view is read (as the other options)."""
     from nfdepth.cli import main

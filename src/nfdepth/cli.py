@@ -372,6 +372,7 @@ def _cmd_stereo(args) -> int:
         raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
+    cost_step = _positive("--cost-step-px", args.cost_step_px)
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
@@ -431,6 +432,8 @@ def _cmd_stereo(args) -> int:
         options["threads"] = args.threads
     if args.disparity_range is not None:
         options["disparity_range_px"] = tuple(args.disparity_range)
+    if cost_step is not None:
+        options["cost_step_px"] = cost_step
     if column:
         from .xy_stereo import static_stereo_xy
 
@@ -588,6 +591,13 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         metavar=("MIN", "MAX"),
         help="disparities to search, px between neighbouring views (as StereoSGBM's range; default: found coarse to fine); skips the pyramid",
+    )
+    p.add_argument(
+        "--cost-step-px",
+        type=float,
+        metavar="PX",
+        help="spacing of the cost volume's candidate disparities, px between neighbouring views (default 0.5); 1 is 15-25 %% faster "
+        "at 640x480, same edge precision, coarser dense values (README: 'Faster, with coarser candidates')",
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions, disparity range (docs/rig-format.md)")
