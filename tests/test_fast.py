@@ -224,6 +224,19 @@ def test_bench_records_well_formed(backend):
         assert r["ratio_to_sgbm"] > 0 and r["ratio_to_floor"] > 0
     table = bench.render_markdown(records)
     assert table.startswith("| case |") and "nf_edges" in table
+    # SGBM with the disparities this scene needs: the multiple of 16 above static stereo's largest
+    from nfdepth.stereo import static_stereo
+
+    covering = [r for r in records if r["name"] == "cv_sgbm_covering" and r["median_ms"] is not None]
+    assert covering
+    for r in covering:
+        frames = bench._rendered((120, 160)) if r["scene"] == "rendered" else bench._middlebury((120, 160))
+        top = float(np.nanmax(static_stereo(frames, reference=1).disparity))
+        assert r["disparities"] % 16 == 0 and top + 1.0 <= r["disparities"]
+        assert r["disparities"] == 16 or top + 1.0 > r["disparities"] - 16  # the smallest such multiple
+        stereo = next(x for x in records if x["name"] == "nf_static_stereo" and x["scene"] == r["scene"])
+        assert stereo["ratio_to_sgbm_covering"] == pytest.approx(stereo["median_ms"] / r["median_ms"])
+        assert f"cv_sgbm_covering ({r['disparities']} disparities)" in table
 
 
 @pytest.mark.skipif(os.name != "posix", reason="POSIX file modes")
