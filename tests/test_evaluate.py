@@ -369,6 +369,8 @@ def test_cli_missing_data_root(capsys, tmp_path):
 def test_cli_bad_views_and_json(capsys, tmp_path):
     code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--views", "two")
     assert code == 2 and "--views" in err
+    code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--cost-step-px", "0")
+    assert code == 2 and err.strip() == "nfdepth: error: --cost-step-px must be a positive number, got 0"
     code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--json", str(tmp_path / "no" / "r.json"))
     assert code == 4 and "does not exist" in err
 
@@ -417,6 +419,26 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
         mix = d["near_steps_share"] * d["bad_1px_near_steps"] + (1 - d["near_steps_share"]) * d["bad_1px_off_steps"]
         assert mix == pytest.approx(d["bad_1px"], abs=1e-12)
     assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3
+    assert res["stereo_options"] == {}
+
+
+@pytest.mark.data
+@needs_cli
+def test_cli_evaluate_cost_step(capsys, tmp_path):
+    """``--cost-step-px`` reaches nfdepth's static stereo, is printed and recorded, and is the library's ``cost_step_px``."""
+    root = _real_root()
+    js = tmp_path / "t.json"
+    code, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(root), "--views", "three", "--methods", "nfdepth", "--cost-step-px", "1", "--json", str(js))
+    assert code == 0, err
+    assert "nfdepth cost_step_px = 1" in out
+    res = json.loads(js.read_text())[0]
+    assert res["stereo_options"] == {"cost_step_px": 1.0}
+    lib = evaluate_scene("tsukuba", views="three", methods=("nfdepth",), stereo_options={"cost_step_px": 1.0})
+    default = evaluate_scene("tsukuba", views="three", methods=("nfdepth",))
+    for part in ("edges", "dense"):
+        assert res["methods"]["nfdepth"][part]["points"] == lib["methods"]["nfdepth"][part]["points"]
+        assert res["methods"]["nfdepth"][part]["median_rel"] == pytest.approx(lib["methods"]["nfdepth"][part]["median_rel"], rel=1e-12)
+    assert res["methods"]["nfdepth"]["dense"]["median_rel"] != default["methods"]["nfdepth"]["dense"]["median_rel"]
 
 
 def test_nfdepth_is_also_scored_on_the_points_a_peer_shares(monkeypatch):

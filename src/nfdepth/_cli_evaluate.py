@@ -40,6 +40,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--downsample", type=int, default=1, metavar="K", help="area-downsample by K first (default 1: full size)")
     p.add_argument("--json", metavar="FILE", help="write the results as JSON (a list, one entry per scene)")
     p.add_argument("--maps", metavar="DIR", help="write |error| maps (PNG, one per scene and method) here")
+    p.add_argument("--cost-step-px", type=float, metavar="PX", help="nfdepth's cost-volume candidate spacing (as nfdepth stereo --cost-step-px; default 0.5)")
 
     def run(args) -> int:
         return _cmd_evaluate(args, CLIError)
@@ -81,7 +82,8 @@ def _fmt_table(res) -> str:
         f"{res['shape'][1]}x{res['shape'][0]} px" + (f" (downsampled {res['downsample']}x)" if res["downsample"] > 1 else "")
         + f", {res['truth_points']} ground-truth pixels"
         + (f" stored in steps of {res['truth_step_px']:g} px" if res.get("truth_step_px") else "")
-        + (f"; {pct(share).strip()} of them near a depth step" if share is not None and math.isfinite(share) else ""),
+        + (f"; {pct(share).strip()} of them near a depth step" if share is not None and math.isfinite(share) else "")
+        + "".join(f"; nfdepth {key} = {value:g}" for key, value in sorted(res.get("stereo_options", {}).items())),
         (
             f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
             f"{'bias px':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
@@ -109,6 +111,11 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
     if args.downsample < 1:
         raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
+    stereo_options = {}
+    if args.cost_step_px is not None:
+        if not (math.isfinite(args.cost_step_px) and args.cost_step_px > 0):
+            raise CLIError(f"--cost-step-px must be a positive number, got {args.cost_step_px:g}", EXIT_USAGE)
+        stereo_options["cost_step_px"] = float(args.cost_step_px)
     js = _check_json_path(args.json, CLIError) if args.json else None
     maps = Path(args.maps) if args.maps else None
     if maps is not None and maps.exists() and not maps.is_dir():
@@ -124,7 +131,7 @@ def _cmd_evaluate(args, CLIError) -> int:
     for name in names:
         scene = loaded.pop(name) if name in loaded else datasets.load_scene(name, root)
         _check_downsample(args.downsample, scene, CLIError)
-        res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None)
+        res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None, stereo_options=stereo_options)
         print(_fmt_table(res), flush=True)
         if maps is not None:
             maps.mkdir(parents=True, exist_ok=True)

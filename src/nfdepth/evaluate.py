@@ -431,7 +431,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         ``scene``, ``views`` (indices into the scene's row), ``view_count``,
         ``reference_index`` (into the row), ``downsample``, ``shape``,
         ``truth_points``, ``truth_step_px`` (the scene's, after view
-        selection and downsampling), ``near_steps_share`` (the share of the
+        selection and downsampling), ``stereo_options`` (as given, ``{}`` by
+        default), ``near_steps_share`` (the share of the
         truth's pixels near its depth steps, :func:`depth_step_mask`) and
         ``methods``: method -> ``{"runtime_s", "dense": errors, "edges":
         errors or None}`` (errors as :func:`disparity_errors`, split at the
@@ -475,6 +476,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         "truth_points": int(known.sum()),
         "truth_step_px": step,
         "near_steps_share": float(np.mean(steps[known])) if known.any() else math.nan,
+        "stereo_options": dict(stereo_options or {}),
         "methods": {},
     }
     maps = {}
