@@ -582,6 +582,7 @@ def _cli_cases(tmp: Path, v):
         ("levels", ["stereo", v0, v1, v2, "--out", out, "--levels", "0"], 2, "levels must be >= 1"),
         ("cost step zero", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "0"], 2, "--cost-step-px must be a positive number, got 0"),
         ("cost step nan", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "nan"], 2, "--cost-step-px must be a positive number, got nan"),
+        ("cost step wider than the range", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "1e300"], 2, "cost_step_px = 1e+300 px is wider than half the search range the pyramid found"),
         ("sizes differ", ["stereo", v0, str(tmp / "small.png"), v2, "--out", out], 2, "all views must have the same size, got v0.png 64x48, small.png 16x16, v2.png 64x48"),
         ("missing view", ["stereo", v0, str(tmp / "nope.png"), v2, "--out", out], 3, "nope.png': no such file"),
         ("directory view", ["stereo", v0, str(tmp / "adir"), v2, "--out", out], 3, "adir': it is a directory, not a file"),

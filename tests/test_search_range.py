@@ -271,6 +271,24 @@ def test_cli_cost_step(plane_files, tmp_path, capsys):
     assert not np.array_equal(default.disparity, lib.disparity, equal_nan=True)
 
 
+def test_cost_step_wider_than_the_found_range(plane_files):
+    """A candidate step wider than half the range the pyramid found is an error that names the largest usable step."""
+    import re
+    import warnings
+
+    from nfdepth.io import read_image
+
+    views = [read_image(p) for p in plane_files]
+    with pytest.raises(ValueError, match="is wider than half the search range the pyramid found") as info:
+        static_stereo(views, reference=1, cost_step_px=1000.0)
+    largest = float(re.search(r"at least three candidates, at most ([0-9.]+) px here", str(info.value)).group(1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # three candidates leave most matches ambiguous (a warning says so)
+        static_stereo(views, reference=1, cost_step_px=largest)  # the step it names is accepted
+    with pytest.raises(ValueError, match="is wider than half"):
+        static_stereo(views, reference=1, cost_step_px=largest + 0.25)
+
+
 def test_cli_bad_disparity_range_before_reading_the_views(tmp_path, capsys):
     """A bad range is a usage error, found before any view is read (as the other options)."""
     from nfdepth.cli import main

@@ -1753,6 +1753,13 @@ def static_stereo(
             else:
                 lo = np.floor(percentile(d, 0.5)) - 2.0
                 hi = np.ceil(percentile(d, 99.5)) + 2.0
+                if float(hi - lo) < 2.0 * cost_step_px:  # a given range was checked against the step up front
+                    msg = (
+                        f"cost_step_px = {cost_step_px:g} px is wider than half the search range the pyramid found "
+                        f"({lo / unit:g}..{hi / unit:g} px per unit of position, {hi - lo:g} px): a step must leave at least three "
+                        f"candidates, at most {0.5 * (hi - lo):g} px here; the useful ones are 0.5 (the default) to 1 px"
+                    )
+                    raise ValueError(msg)
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
