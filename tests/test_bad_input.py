@@ -579,6 +579,7 @@ def _cli_cases(tmp: Path, v):
         ("views wrong order", ["stereo", v0, v1, v2, "--out", out, "--positions", "2", "1", "0"], 2, "positions must be strictly increasing"),
         ("positions nan", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1", "nan"], 2, "positions must be finite"),
         ("sigma negative", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "-1"], 2, "sigma_px must be a finite number >= 0, got -1.0"),
+        ("sigma huge", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "1e300"], 2, "sigma_px = 1e+300 px is beyond any image"),
         ("levels", ["stereo", v0, v1, v2, "--out", out, "--levels", "0"], 2, "levels must be >= 1"),
         ("cost step zero", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "0"], 2, "--cost-step-px must be a positive number, got 0"),
         ("cost step nan", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "nan"], 2, "--cost-step-px must be a positive number, got nan"),

@@ -140,3 +140,41 @@ def test_vectors_refuse_text_and_bools(value, why):
 @pytest.mark.parametrize("value", [[1, 0, 0], (1.0, 0.0, 0.0), np.array([1, 0, 0], dtype=np.int32), [np.float32(1), np.int64(0), 0.0]])
 def test_vectors_accept_numbers(value):
     np.testing.assert_array_equal(as_vector3("velocity", value), [1.0, 0.0, 0.0])
+
+
+def test_scale_px_caps_gaussian_scales():
+    """Sigmas and windows beyond any image are refused by name (a huge one overflowed OpenCV's kernel size: an internal error)."""
+    from nfdepth._validate import MAX_SCALE_PX, check_scale_px
+
+    assert check_scale_px("sigma_px", 0) == 0.0 and check_scale_px("sigma_px", MAX_SCALE_PX) == MAX_SCALE_PX
+    with pytest.raises(ValueError, match=r"sigma_px = 1e\+300 px is beyond any image: expected a Gaussian scale of at most 10000 px"):
+        check_scale_px("sigma_px", 1e300)
+    with pytest.raises(ValueError, match="a positive finite number"):
+        check_scale_px("dense_window_px", 0, zero_ok=False)
+    with pytest.raises(ValueError, match="a finite number >= 0"):
+        check_scale_px("sigma_px", -1)
+
+
+@pytest.mark.parametrize(
+    ("entry", "name"),
+    [
+        ("gaussian_smooth", "sigma_px"),
+        ("normal_flow_edges", "sigma_px"),
+        ("normal_flow_edges", "corner_window_px"),
+        ("static_stereo", "dense_window_px"),
+        ("static_stereo", "cost_sigma_px"),
+    ],
+)
+def test_huge_gaussian_scales_are_refused_where_they_enter(entry, name):
+    from nfdepth.fast import normal_flow_edges
+    from nfdepth.normal_flow import gaussian_smooth
+    from nfdepth.stereo import static_stereo
+
+    views = [np.random.default_rng(k).random((24, 32)).astype(np.float32) for k in range(3)]
+    calls = {
+        "gaussian_smooth": lambda **kw: gaussian_smooth(views[0], **kw),
+        "normal_flow_edges": lambda **kw: normal_flow_edges(views, **{"sigma_px": 1.0, **kw}),
+        "static_stereo": lambda **kw: static_stereo(views, reference=1, **kw),
+    }
+    with pytest.raises(ValueError, match=rf"{name} = 1e\+300 px is beyond any image"):
+        calls[entry](**{name: 1e300})

@@ -120,6 +120,20 @@ def check_nonnegative_finite(name: str, value) -> float:
     return _check_number(name, value, "a finite number >= 0", lambda x: np.isfinite(x) and x >= 0)
 
 
+#: Largest Gaussian scale (sigma or window) accepted, in px: far beyond any image's
+#: useful smoothing, and small enough for OpenCV's kernel sizes (C ints).
+MAX_SCALE_PX = 1e4
+
+
+def check_scale_px(name: str, value, *, zero_ok: bool = True) -> float:
+    """A Gaussian scale in px: a finite number >= 0 (``> 0`` unless ``zero_ok``) of at most :data:`MAX_SCALE_PX`."""
+    x = check_nonnegative_finite(name, value) if zero_ok else check_positive_finite(name, value)
+    if x > MAX_SCALE_PX:
+        msg = f"{name} = {x:g} px is beyond any image: expected a Gaussian scale of at most {MAX_SCALE_PX:g} px (a few px is usual)"
+        raise ValueError(msg)
+    return x
+
+
 def check_nonzero_finite(name: str, value, *, what: str = "a non-zero finite number") -> float:
     """Return ``value`` as float, or raise if it is not a finite, non-zero number."""
     return _check_number(name, value, what, lambda x: np.isfinite(x) and x != 0)

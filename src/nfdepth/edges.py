@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import check_fraction, check_int, check_nonnegative_finite, check_positive_finite
+from ._validate import check_fraction, check_int, check_nonnegative_finite, check_scale_px
 from .normal_flow import GradientField
 
 #: Gradients below this fraction of the largest smoothed intensity are float32
@@ -87,7 +87,7 @@ def _corner_window_blocks(window_sigma_px: float) -> tuple[float, int]:
     the whole window has the requested variance. Windows of 1 px or less
     get a minimal 0.1-block Gaussian: effectively a 1 px window.
     """
-    window_sigma_px = check_positive_finite("window_sigma_px", window_sigma_px)
+    window_sigma_px = check_scale_px("window_sigma_px", window_sigma_px, zero_ok=False)
     sigma = max(math.sqrt(max(window_sigma_px**2 - 1.0, 0.0)) / 2.0, 0.1)
     return sigma, max(1, int(math.ceil(3.0 * sigma)))
 
@@ -234,7 +234,7 @@ def select_edge_points(
         msg = f"smoothed_middle must have shape {(mag.shape[0] + 1, mag.shape[1] + 1)}, got {smoothed_middle.shape}"
         raise ValueError(msg)
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
-    corner_window_px = check_positive_finite("corner_window_px", corner_window_px)
+    corner_window_px = check_scale_px("corner_window_px", corner_window_px, zero_ok=False)
     if min_gradient is None:
         relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
         high = float(percentile(mag, 99.0)) if mag.size else 0.0

@@ -48,7 +48,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_frames, as_image, check_positive_finite, check_scale_px, float_dtype
 
 __all__ = [
     "STENCILS",
@@ -134,7 +134,7 @@ def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
 
     The kernel is truncated at 4 sigma on each side.
     """
-    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    sigma_px = check_scale_px("sigma_px", sigma_px)
     if sigma_px == 0:
         return np.array(image, copy=True)
     radius = max(1, int(np.ceil(4.0 * sigma_px)))
@@ -327,7 +327,7 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     if stencil not in STENCILS:
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
         raise ValueError(msg)
-    g = _gaussian_kernel_1d(check_nonnegative_finite("sigma_px", sigma_px))
+    g = _gaussian_kernel_1d(check_scale_px("sigma_px", sigma_px))
     g2 = np.outer(g, g)
     pad = np.pad(g2, 3)
     cell = 0.25 * (pad[:-1, :-1] + pad[:-1, 1:] + pad[1:, :-1] + pad[1:, 1:])

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, check_scale_px, float_dtype
 from .camera import PinholeCamera, RigidMotion
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
 from .edges import EdgeSelection, select_edge_points
@@ -278,7 +278,7 @@ def dynamic_stereo(
         )
         raise ValueError(msg)
     step = check_positive_finite("frame_interval", frame_interval)
-    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    sigma_px = check_scale_px("sigma_px", sigma_px)
     noise = _noise_level(noise_std, frames)
     s = [gaussian_smooth(f, sigma_px=sigma_px) for f in frames]
     moving = gradients([s[0], s[2], s[4]], frame_interval=2.0 * step, stencil=stencil)

@@ -268,7 +268,7 @@ from . import _view_fit
 from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
-from ._validate import _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_view_index, float_dtype
+from ._validate import _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -1616,15 +1616,15 @@ def static_stereo(
     n = len(views)
     ref = check_view_index("reference", reference, n)
     t = _check_positions(positions, n, ref)
-    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    sigma_px = check_scale_px("sigma_px", sigma_px)
     if min_gradient is not None:
         min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     min_cos = check_fraction("min_cos", min_cos)
     iterations_per_level = check_int("iterations_per_level", iterations_per_level, 1)
     edge_iterations = check_int("edge_iterations", edge_iterations, 0)
-    dense_window_px = check_positive_finite("dense_window_px", dense_window_px)
-    select_window_px = check_positive_finite("select_window_px", select_window_px)
+    dense_window_px = check_scale_px("dense_window_px", dense_window_px, zero_ok=False)
+    select_window_px = check_scale_px("select_window_px", select_window_px, zero_ok=False)
     max_std_px = check_positive_finite("max_std_px", max_std_px)
     dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
     max_edge_std_px = check_positive_or_inf("max_edge_std_px", max_edge_std_px)
@@ -1644,14 +1644,14 @@ def static_stereo(
     propagate_radius = check_int("propagate_radius", propagate_radius, 1)
     polish_iterations = check_int("polish_iterations", polish_iterations, 0)
     polish_radius = check_int("polish_radius", polish_radius, 1)
-    photometric_window_px = check_nonnegative_finite("photometric_window_px", photometric_window_px)
+    photometric_window_px = check_scale_px("photometric_window_px", photometric_window_px)
     cost_step_px = check_positive_finite("cost_step_px", cost_step_px)
     cost_radius = check_int("cost_radius", cost_radius, 1)
     cost_eps = check_positive_finite("cost_eps", cost_eps)
     cost_tau_i = check_positive_finite("cost_tau_i", cost_tau_i)
     cost_tau_g = check_positive_finite("cost_tau_g", cost_tau_g)
     cost_alpha = check_fraction("cost_alpha", cost_alpha)
-    cost_sigma_px = check_nonnegative_finite("cost_sigma_px", cost_sigma_px)
+    cost_sigma_px = check_scale_px("cost_sigma_px", cost_sigma_px)
     if cost_median_px not in (0, 1, 3, 5):
         msg = f"cost_median_px must be 0, 1, 3 or 5, got {cost_median_px!r}"
         raise ValueError(msg)

@@ -75,7 +75,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite
+from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite, check_scale_px
 from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
@@ -511,7 +511,7 @@ def depth_from_video(
     if not isinstance(cam, PinholeCamera):
         msg = "depth_from_video needs a camera: pass rig=... or camera=PinholeCamera(...)"
         raise TypeError(msg)
-    sigma_px = check_nonnegative_finite("sigma_px", sigma_px)
+    sigma_px = check_scale_px("sigma_px", sigma_px)
     process_noise = check_nonnegative_finite("process_noise", process_noise)
     gate = check_positive_finite("gate", gate)
     min_std_px = check_positive_finite("min_std_px", min_std_px)
