@@ -578,6 +578,8 @@ def _cli_cases(tmp: Path, v):
         ("positions count", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1"], 2, "positions must hold one number per view (3)"),
         ("views wrong order", ["stereo", v0, v1, v2, "--out", out, "--positions", "2", "1", "0"], 2, "positions must be strictly increasing"),
         ("positions nan", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1", "nan"], 2, "positions must be finite"),
+        ("positions tiny unit", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1e-300", "2e-300"], 2, "positions must keep the views 1e-30 to 1e+30 units from the reference"),
+        ("positions huge unit", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1e300", "2e300"], 2, "rescale them, e.g. to steps between neighbouring views"),
         ("sigma negative", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "-1"], 2, "sigma_px must be a finite number >= 0, got -1.0"),
         ("sigma huge", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "1e300"], 2, "sigma_px = 1e+300 px is beyond any image"),
         ("levels", ["stereo", v0, v1, v2, "--out", out, "--levels", "0"], 2, "levels must be >= 1"),

@@ -986,6 +986,8 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations, offsets
     return result
 
 
+_POSITION_UNIT_RANGE = (1e-30, 1e30)  # views' distances from the reference, in units of position (see _check_positions)
+
 _MIN_SIZE_PX = 3  # smallest view side: the 2 x 2 cell stencils and the edge test need 3 px
 
 _SIDE_REACH = 2  # px either side of an edge point that tell the two sides of a depth step
@@ -1400,6 +1402,15 @@ def _check_positions(positions, n, reference):
             raise ValueError(msg)
         if not np.all(np.diff(pos) > 0):
             msg = f"positions must be strictly increasing (views ordered along the baseline), got {pos.tolist()}"
+            raise ValueError(msg)
+        rel = np.abs(pos - pos[reference])
+        # outputs are float32 px per unit of position: a unit of 1e-300 overflows them, one of 1e300 rounds them to 0
+        if rel[rel > 0].min() < _POSITION_UNIT_RANGE[0] or rel.max() > _POSITION_UNIT_RANGE[1]:
+            lo, hi = _POSITION_UNIT_RANGE
+            msg = (
+                f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
+                f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
+            )
             raise ValueError(msg)
     return pos - pos[reference]
 
