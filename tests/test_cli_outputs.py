@@ -212,7 +212,7 @@ def test_evaluate_downsample_too_large_names_the_largest_factor(capfd):
         data_root()
     except DataNotFoundError:
         pytest.skip("real data not found: set NFDEPTH_DATA")
-    code, out, err = run_cli(capfd, "evaluate", "tsukuba", "--downsample", "1000")
+    code, out, err = run_cli(capfd, "evaluate", "tsukuba", "--downsample", "1000", "--methods", "waxman_sinha_farneback")
     assert code == 2 and out == ""
     assert err.strip() == (
         "nfdepth: error: --downsample 1000 is too large for tsukuba (384x288 px): expected an integer from 1 to 144"
@@ -224,6 +224,17 @@ def test_evaluate_downsample_too_large_names_the_largest_factor(capfd):
     assert downsample_scene(load_scene("tsukuba"), 144).shape == (2, 2)
     with pytest.raises(ValueError, match="too large"):
         downsample_scene(load_scene("tsukuba"), 145)
+    # the methods' own needs: the largest factor named runs, the next one is refused up front
+    for methods, largest, why in (
+        (["nfdepth"], 96, "nfdepth needs views of at least 3x3 px"),
+        (["sgbm"], 20, "sgbm needs views of at least 8x8 px, more than 18 px wide"),
+        (["bm"], 16, "bm needs views of at least 8x8 px, more than 23 px wide"),
+        (["waxman_sinha"], 32, "waxman_sinha's DIS flow needs a side of at least 12 px"),
+    ):
+        code, _, err = run_cli(capfd, "evaluate", "tsukuba", "--views", "three", "--methods", *methods, "--downsample", str(largest + 1))
+        assert code == 2 and f"expected an integer from 1 to {largest} ({why})" in err, err
+        code, _, err = run_cli(capfd, "evaluate", "tsukuba", "--views", "three", "--methods", *methods, "--downsample", str(largest))
+        assert code == 0, err
 
 
 def test_a_directory_output_says_it_is_a_directory(tmp_path, work, capfd):

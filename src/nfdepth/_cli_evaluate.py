@@ -60,16 +60,34 @@ def _check_json_path(path: str, CLIError) -> Path:
     return out
 
 
-def _check_downsample(factor: int, scene, CLIError) -> None:
-    """Refuse a ``--downsample`` factor that leaves less than 2x2 pixels of ``scene``."""
+# What each method needs of the (downsampled) views, as (test of (rows, cols), what it needs):
+# static stereo's stencils 3 px; cv2.StereoSGBM/BM 8x8 px and more columns than their
+# fewest disparities (16) and half block (5 / 15 px); DIS a side of 12 px.
+_SIZE_NEEDS = {
+    "nfdepth": (lambda h, w: min(h, w) >= 3, "nfdepth needs views of at least 3x3 px"),
+    "sgbm": (lambda h, w: min(h, w) >= 8 and w > 18, "sgbm needs views of at least 8x8 px, more than 18 px wide"),
+    "bm": (lambda h, w: min(h, w) >= 8 and w > 23, "bm needs views of at least 8x8 px, more than 23 px wide"),
+    "waxman_sinha": (lambda h, w: min(h, w) >= 2 and max(h, w) >= 12, "waxman_sinha's DIS flow needs a side of at least 12 px"),
+    "waxman_sinha_farneback": (lambda h, w: min(h, w) >= 2, "the downsampled views need at least 2x2 px"),
+}
+
+
+def _check_downsample(factor: int, scene, CLIError, methods=("nfdepth",)) -> None:
+    """Refuse a ``--downsample`` factor that leaves views too small for one of ``methods`` (names the largest usable factor)."""
     h, w = scene.shape
-    largest = min(h, w) // 2
-    if factor > largest:
-        raise CLIError(
-            f"--downsample {factor} is too large for {scene.name} ({w}x{h} px): expected an integer from 1 to {largest}"
-            " (the downsampled views need at least 2x2 px)",
-            EXIT_USAGE,
-        )
+    needs = [_SIZE_NEEDS[m] for m in methods if m in _SIZE_NEEDS] or [_SIZE_NEEDS["waxman_sinha_farneback"]]
+
+    def fails(k):
+        return [why for ok, why in needs if not ok(h // k, w // k)]
+
+    if not fails(factor):
+        return
+    largest = next((k for k in range(factor - 1, 0, -1) if not fails(k)), None)
+    expected = f"an integer from 1 to {largest}" if largest else "1 (no downsampling: the views are too small already)"
+    raise CLIError(
+        f"--downsample {factor} is too large for {scene.name} ({w}x{h} px): expected {expected} ({'; '.join(fails(factor))})",
+        EXIT_USAGE,
+    )
 
 
 def _fmt_table(res) -> str:
@@ -126,11 +144,11 @@ def _cmd_evaluate(args, CLIError) -> int:
     if args.downsample > 1 and len(names) > 1:  # before any output: the factor must fit every scene (kept, not read twice)
         for name in names:
             loaded[name] = datasets.load_scene(name, root)
-            _check_downsample(args.downsample, loaded[name], CLIError)
+            _check_downsample(args.downsample, loaded[name], CLIError, args.methods)
     results = []
     for name in names:
         scene = loaded.pop(name) if name in loaded else datasets.load_scene(name, root)
-        _check_downsample(args.downsample, scene, CLIError)
+        _check_downsample(args.downsample, scene, CLIError, args.methods)
         res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None, stereo_options=stereo_options)
         print(_fmt_table(res), flush=True)
         if maps is not None:
