@@ -482,3 +482,11 @@ def test_two_view_peers_say_when_the_images_are_too_narrow(fn, name, ok_width, c
     assert fn(img[:, :ok_width], img[:, :ok_width]).shape == (40, ok_width)
     with pytest.raises(ValueError, match=rf"^the images are {ok_width - 1} px wide: {name} with 16 disparities and a \d+ px block needs more than {columns} columns"):
         fn(img[:, : ok_width - 1], img[:, : ok_width - 1])
+
+
+def test_waxman_sinha_dis_too_small_is_a_clear_error():
+    """DIS needs a side of 12 px (OpenCV raised its own error); Farneback takes smaller views."""
+    views = [np.random.default_rng(k).random((5, 7)) * 255 for k in range(3)]
+    with pytest.raises(ValueError, match="DIS optical flow needs a side of at least 12 px"):
+        baselines.waxman_sinha_disparity(views, reference=1)
+    assert baselines.waxman_sinha_disparity(views, reference=1, method="farneback").disparity.shape == (5, 7)

@@ -375,6 +375,9 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
         msg = f"all views must have the same size, got {sorted(shapes)}"
         raise ValueError(msg)
     ref8 = grey[reference]
+    if method == "dis" and max(ref8.shape[:2]) < 12:
+        msg = f"the views are {ref8.shape[1]}x{ref8.shape[0]} px: DIS optical flow needs a side of at least 12 px (method='farneback' takes smaller ones)"
+        raise ValueError(msg)
     t = pos - pos[reference]
     order = sorted((k for k in range(n) if k != reference), key=lambda k: (abs(t[k]), k))
     num = np.zeros(ref8.shape, np.float64)
