@@ -604,6 +604,7 @@ def _cli_cases(tmp: Path, v):
         ("bench json", ["bench", "--json", str(tmp / "b.txt")], 2, "--json '" + str(tmp / "b.txt") + "' must end in one of .json"),
         ("bench threads", ["bench", "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
         ("reproduce noise", ["reproduce", "--noise", "-1"], 2, "--noise must be a finite number >= 0"),
+        ("reproduce noise huge", ["reproduce", "--only", "exp1", "--noise", "1e300"], 2, "noise_std = 1e+300 grey levels is beyond any image: expected at most 1e+06"),
         ("reproduce json folder", ["reproduce", "--only", "exp1", "--json", str(tmp / "nodir" / "r.json")], 4, "does not exist"),
         ("reproduce out is a file", ["reproduce", "--only", "exp1", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),
         ("demo out is a file", ["demo", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),

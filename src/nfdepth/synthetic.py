@@ -91,8 +91,14 @@ def _check_time(name: str, value) -> float:
     return check_finite(name, value)
 
 
+_MAX_NOISE_STD = 1e6  # grey levels: the renders span 0-255; far more would only overflow float32 downstream
+
+
 def _check_noise(noise_std, rng) -> float:
     std = check_nonnegative_finite("noise_std", noise_std)
+    if std > _MAX_NOISE_STD:
+        msg = f"noise_std = {std:g} grey levels is beyond any image: expected at most {_MAX_NOISE_STD:g} (the renders span 0-255)"
+        raise ValueError(msg)
     if std > 0 and rng is None:
         msg = f"noise_std={std} > 0 needs rng, a numpy.random.Generator (e.g. numpy.random.default_rng(0)); got rng=None"
         raise ValueError(msg)
