@@ -162,6 +162,7 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["motion"].update(velocity=[1.0, 2.0]), r"motion\.velocity = \[1\.0, 2\.0\]: expected 3 finite numbers"),
         (lambda d: d["motion"].update(rotation_deg="fast"), r"motion\.rotation_deg = 'fast': expected 3 finite numbers"),
         (lambda d: d["motion"].update(frame_interval=0), r"motion\.frame_interval = 0: expected a number > 0"),
+        (lambda d: d["motion"].update(frame_interval=1e-300), r"motion\.frame_interval = 1e-300: expected a time step within 1e-30\.\.1e\+30"),
         (lambda d: d["stereo"].update(baseline=0.0), r"stereo\.baseline = 0\.0: expected a number > 0"),
         (lambda d: d["stereo"].pop("baseline"), r"stereo\.baseline is missing"),
         (lambda d: d["stereo"].update(axis="z"), r"stereo\.axis = 'z': expected \"x\" or \"y\""),

@@ -178,3 +178,28 @@ def test_huge_gaussian_scales_are_refused_where_they_enter(entry, name):
     }
     with pytest.raises(ValueError, match=rf"{name} = 1e\+300 px is beyond any image"):
         calls[entry](**{name: 1e300})
+
+
+@pytest.mark.parametrize("entry", ["normal_flow", "normal_flow_edges", "dynamic_stereo"])
+def test_frame_interval_outside_its_range_is_refused(entry):
+    """A time step of 1e-300 overflowed the noise formula of dynamic stereo (an internal error); every entry refuses it by name."""
+    from nfdepth._validate import check_frame_interval
+
+    assert check_frame_interval("frame_interval", 1e-30) == 1e-30
+    frames = [np.random.default_rng(k).random((24, 32)) for k in range(3)]
+    with pytest.raises(ValueError, match=r"frame_interval = 1e-300 is outside 1e-30\.\.1e\+30"):
+        if entry == "normal_flow":
+            from nfdepth.normal_flow import normal_flow
+
+            normal_flow(frames, sigma_px=1.0, frame_interval=1e-300)
+        elif entry == "normal_flow_edges":
+            from nfdepth.fast import normal_flow_edges
+
+            normal_flow_edges(frames, sigma_px=1.0, frame_interval=1e-300)
+        else:
+            from nfdepth.camera import PinholeCamera, RigidMotion
+            from nfdepth.pipelines import dynamic_stereo
+
+            five = [np.random.default_rng(k).random((24, 32)) for k in range(5)]
+            cam = PinholeCamera(30.0, 32, 24)
+            dynamic_stereo(five, camera=cam, relative_motion=RigidMotion(translation=(1.0, 0.0, 0.0)), sigma_px=1.0, frame_interval=1e-300)

@@ -134,6 +134,21 @@ def check_scale_px(name: str, value, *, zero_ok: bool = True) -> float:
     return x
 
 
+#: A time step (``frame_interval``) is accepted within these bounds: outside them
+#: the normal flow per unit time and its noise overflow or vanish in float arithmetic.
+UNIT_SCALE_RANGE = (1e-30, 1e30)
+
+
+def check_frame_interval(name: str, value) -> float:
+    """A positive finite time step within :data:`UNIT_SCALE_RANGE` (else rescale the unit of time)."""
+    x = check_positive_finite(name, value)
+    lo, hi = UNIT_SCALE_RANGE
+    if not lo <= x <= hi:
+        msg = f"{name} = {x:g} is outside {lo:g}..{hi:g}: give times in a unit that keeps the frame interval in that range (e.g. frames)"
+        raise ValueError(msg)
+    return x
+
+
 def check_nonzero_finite(name: str, value, *, what: str = "a non-zero finite number") -> float:
     """Return ``value`` as float, or raise if it is not a finite, non-zero number."""
     return _check_number(name, value, what, lambda x: np.isfinite(x) and x != 0)

@@ -104,7 +104,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_scale_px
+from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_nonnegative_finite, check_scale_px
 from .edges import ROUNDING_GRADIENT, _block_read_back, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
 
@@ -174,7 +174,7 @@ class _Params:
 
 def _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px):
     sigma_px = check_scale_px("sigma_px", sigma_px)
-    frame_interval = check_positive_finite("frame_interval", frame_interval)
+    frame_interval = check_frame_interval("frame_interval", frame_interval)
     if stencil not in STENCILS:
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
         raise ValueError(msg)

@@ -48,7 +48,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_positive_finite, check_scale_px, float_dtype
+from ._validate import as_frames, as_image, check_frame_interval, check_scale_px, float_dtype
 
 __all__ = [
     "STENCILS",
@@ -198,7 +198,7 @@ def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "m
     if stencil not in STENCILS:
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
         raise ValueError(msg)
-    dt = check_positive_finite("frame_interval", frame_interval)
+    dt = check_frame_interval("frame_interval", frame_interval)
     if not isinstance(smoothed_frames, (list, tuple, np.ndarray)):
         msg = f"smoothed_frames must be a sequence of 2 or 3 2-D arrays, got {type(smoothed_frames).__name__}"
         raise TypeError(msg)

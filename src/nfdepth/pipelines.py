@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import as_frames, check_nonnegative_finite, check_positive_finite, check_scale_px, float_dtype
+from ._validate import as_frames, check_frame_interval, check_nonnegative_finite, check_positive_finite, check_scale_px, float_dtype
 from .camera import PinholeCamera, RigidMotion
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
 from .edges import EdgeSelection, select_edge_points
@@ -277,7 +277,7 @@ def dynamic_stereo(
             "a pure rotation): depth is undeterminable; the cameras need a non-zero relative translation"
         )
         raise ValueError(msg)
-    step = check_positive_finite("frame_interval", frame_interval)
+    step = check_frame_interval("frame_interval", frame_interval)
     sigma_px = check_scale_px("sigma_px", sigma_px)
     noise = _noise_level(noise_std, frames)
     s = [gaussian_smooth(f, sigma_px=sigma_px) for f in frames]

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from ._validate import UNIT_SCALE_RANGE
 from .camera import PinholeCamera, RigidMotion
 
 if sys.version_info >= (3, 11):
@@ -465,6 +466,9 @@ def _parse_motion(table) -> MotionSpec:
         raise _fail("motion.velocity", t["velocity"], "a non-zero translation (depth needs a baseline between the cameras)")
     rotation = _vector(t, "motion", "rotation_deg", default=np.zeros(3))
     interval = _number(t, "motion", "frame_interval", required=False, positive=True, default=1.0)
+    lo, hi = UNIT_SCALE_RANGE
+    if not lo <= interval <= hi:
+        raise _fail("motion.frame_interval", t["frame_interval"], f"a time step within {lo:g}..{hi:g} (give times in a unit that keeps it there, e.g. frames)")
     crossings = None
     if "crossings" in t:
         try:
