@@ -570,6 +570,7 @@ def _cli_cases(tmp: Path, v):
         ("baseline zero", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10", "--baseline", "0"], 2, "--baseline must be a positive number, got 0"),
         ("focal without baseline", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10"], 2, "--focal-px and --baseline go together"),
         ("focal baseline overflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e300", "--baseline", "1e300"], 2, "--focal-px 1e+300 times --baseline 1e+300 is outside the floating-point range"),
+        ("depth beyond float32", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e20", "--baseline", "1e20"], 2, "does not fit a float32 output (about 1e-45 to 3.4e38): give --focal-px and --baseline"),
         ("focal baseline underflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e-300", "--baseline", "1e-300"], 2, "--focal-px 1e-300 times --baseline 1e-300 is outside the floating-point range"),
         ("ply without depth", ["stereo", v0, v1, v2, "--out", out, "--ply", str(tmp / "p.ply")], 2, "--ply needs --focal-px and --baseline"),
         ("reference range", ["stereo", v0, v1, v2, "--out", out, "--reference", "3"], 2, "--reference must index one of the 3 views (0..2), got 3"),

@@ -477,3 +477,17 @@ def test_to_rgb8_scales_every_bit_depth_to_8_bits():
         to_rgb8(np.zeros((2, 2, 5)))
     with pytest.raises(TypeError, match="dtype"):
         to_rgb8(np.array([["a"]]))
+
+
+def test_to_float32_map_refuses_values_float32_cannot_hold():
+    """Finite depths beyond float32 would be written as inf (or 0); NaN and inf pass as they are."""
+    from nfdepth.io import to_float32_map
+
+    ok = np.array([[1.5, np.nan], [np.inf, -2.0e30]])
+    out = to_float32_map(ok)
+    assert out.dtype == np.float32
+    np.testing.assert_array_equal(out, ok.astype(np.float32))
+    with pytest.raises(ValueError, match=r"a depth of 5e\+40 does not fit a float32 output .*: use metres"):
+        to_float32_map(np.array([1.0, 5e40]), what="a depth", hint="use metres")
+    with pytest.raises(ValueError, match=r"a value of 1e-50 does not fit"):
+        to_float32_map(np.array([1.0, 1e-50]))

@@ -120,6 +120,7 @@ def _cmd_dynamic(args) -> int:
     from .io import (
         atomic_write,
         read_image,
+        to_float32_map,
         to_rgb8,
         write_array,
         write_colormap_png,
@@ -146,6 +147,9 @@ def _cmd_dynamic(args) -> int:
     for k, (p, f) in enumerate(zip(args.images, frames), 1):
         rig.check_image_shape(f.shape, what=f"I{k} '{Path(p).name}'")
     result = dynamic_stereo_from_rig(frames, rig, **options)
+    hint = "give the rig's focal length and speeds in units that keep depths in that range"
+    to_float32_map(result.depth[result.valid], what="a depth", hint=hint)  # the maps, the point cloud
+    to_float32_map(result.depth_std[result.valid], what="a depth standard deviation", hint=hint)
     depth, std = edge_depth_maps(result)
     write_array(outs["out"], depth, force=args.force)
     if "uncertainty" in outs:

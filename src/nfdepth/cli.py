@@ -334,7 +334,7 @@ def _positive(name: str, value):
 
 
 def _cmd_stereo(args) -> int:
-    from .io import depth_to_points, read_image, to_rgb8, write_array, write_colormap_png, write_ply
+    from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
     from .stereo import static_stereo
 
     if len(args.views) < 2:
@@ -466,10 +466,13 @@ def _cmd_stereo(args) -> int:
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)
         unit = "scene units"
-    write_array(outputs[0], values.astype(np.float32), force=args.force)
+    hint = "give --focal-px and --baseline (or the rig's) in units that keep depths in that range"
+    values = to_float32_map(values, what=f"a {'depth' if focal is not None else 'disparity'}", hint=hint)
+    std = to_float32_map(std, what="a standard deviation", hint=hint)
+    write_array(outputs[0], values, force=args.force)
     k = 1
     if args.uncertainty:
-        write_array(outputs[k], std.astype(np.float32), force=args.force)
+        write_array(outputs[k], std, force=args.force)
         k += 1
     if args.fill_mask:
         write_array(outputs[k], np.where(np.isfinite(values), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)

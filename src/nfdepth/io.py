@@ -48,6 +48,7 @@ __all__ = [
     "ARRAY_EXTENSIONS",
     "LUMA_WEIGHTS",
     "read_image",
+    "to_float32_map",
     "to_grey",
     "read_pfm",
     "write_pfm",
@@ -495,6 +496,28 @@ def write_pfm(path, array, *, force: bool = False) -> Path:
     arr = _as_map("array", array, allow_colour=True)
     payload = _pfm_bytes(arr)
     return atomic_write(path, lambda fh: fh.write(payload), force=force)
+
+
+def to_float32_map(values, *, what: str = "a value", hint: str = "rescale it") -> np.ndarray:
+    """``values`` as float32 for an output file; ``ValueError`` if a finite value would become inf or 0 there.
+
+    ``what`` names a value in the message (``"a depth"``), ``hint`` says what
+    to do about it.
+
+    Depths in extreme units (a focal length or baseline of 1e300) are finite
+    in float64 but not in a float32 map: written as they are, they would be
+    silently infinite.
+    """
+    v = np.asarray(values)
+    with np.errstate(over="ignore", under="ignore"):
+        out = v.astype(np.float32)
+    finite = np.isfinite(v)
+    lost = finite & (~np.isfinite(out) | ((out == 0) & (v != 0)))
+    if np.any(lost):
+        worst = float(np.max(np.abs(v[lost])))
+        msg = f"{what} of {worst:.3g} does not fit a float32 output (about 1e-45 to 3.4e38): {hint}"
+        raise ValueError(msg)
+    return out
 
 
 def write_array(path, array, *, force: bool = False) -> Path:

@@ -138,6 +138,13 @@ def _vector(table: dict, section: str, name: str, *, required: bool = False, def
     return np.array(value, dtype=float)
 
 
+def _check_scale(key: str, raw: Any, magnitude: float, what: str) -> None:
+    """Refuse a length, speed or focal length outside :data:`UNIT_SCALE_RANGE`: depths in float32 outputs overflow or vanish beyond it."""
+    lo, hi = UNIT_SCALE_RANGE
+    if not lo <= magnitude <= hi:
+        raise _fail(key, raw, f"{what} of {lo:g} to {hi:g} (give it in a unit that keeps it there: depths are written as float32)")
+
+
 def _check_keys(table: Any, section: str, allowed: tuple[str, ...]) -> dict:
     if not isinstance(table, dict):
         raise _fail(section, table, f"a table [{section}]")
@@ -452,6 +459,7 @@ class Rig:
 def _parse_camera(table) -> PinholeCamera:
     t = _check_keys(table, "camera", ("focal_px", "width_px", "height_px", "cx_px", "cy_px"))
     focal = _number(t, "camera", "focal_px", positive=True)
+    _check_scale("camera.focal_px", t["focal_px"], focal, "a focal length")
     width = _integer(t, "camera", "width_px")
     height = _integer(t, "camera", "height_px")
     cx = _number(t, "camera", "cx_px", required=False)
@@ -464,6 +472,7 @@ def _parse_motion(table) -> MotionSpec:
     velocity = _vector(t, "motion", "velocity", required=True)
     if not np.any(velocity):
         raise _fail("motion.velocity", t["velocity"], "a non-zero translation (depth needs a baseline between the cameras)")
+    _check_scale("motion.velocity", t["velocity"], float(np.max(np.abs(velocity))), "a speed")
     rotation = _vector(t, "motion", "rotation_deg", default=np.zeros(3))
     interval = _number(t, "motion", "frame_interval", required=False, positive=True, default=1.0)
     lo, hi = UNIT_SCALE_RANGE
@@ -507,6 +516,7 @@ def check_crossings(crossings) -> tuple:
 def _parse_stereo(table) -> StereoSpec:
     t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions", "disparity_range_px"))
     baseline = _number(t, "stereo", "baseline", positive=True)
+    _check_scale("stereo.baseline", t["baseline"], baseline, "a baseline")
     which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
     axis = None
     if which == "direction":
@@ -551,6 +561,7 @@ def _parse_video(table, base: Path | None) -> VideoSpec:
         v = _vector(t, "video", "velocity")
         if not np.any(v):
             raise _fail("video.velocity", t["velocity"], "a non-zero camera translation per frame")
+        _check_scale("video.velocity", t["velocity"], float(np.max(np.abs(v))), "a speed")
         return VideoSpec(velocity=v)
     if which == "positions":
         p = t["positions"]
