@@ -134,8 +134,10 @@ def check_scale_px(name: str, value, *, zero_ok: bool = True) -> float:
     return x
 
 
-#: A time step (``frame_interval``) is accepted within these bounds: outside them
-#: the normal flow per unit time and its noise overflow or vanish in float arithmetic.
+#: Time steps, view positions (their distances from the reference) and a rig's
+#: lengths, speeds and focal lengths are accepted within these bounds, in their own
+#: units: outside them, values per unit overflow or vanish in float arithmetic and
+#: in the float32 outputs.
 UNIT_SCALE_RANGE = (1e-30, 1e30)
 
 

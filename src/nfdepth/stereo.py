@@ -268,7 +268,7 @@ from . import _view_fit
 from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
-from ._validate import _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
+from ._validate import UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -986,8 +986,6 @@ def _refine_edges(smoothed, t, ref, rows, cols, d0, weights, iterations, offsets
     return result
 
 
-_POSITION_UNIT_RANGE = (1e-30, 1e30)  # views' distances from the reference, in units of position (see _check_positions)
-
 _MIN_SIZE_PX = 3  # smallest view side: the 2 x 2 cell stencils and the edge test need 3 px
 
 _SIDE_REACH = 2  # px either side of an edge point that tell the two sides of a depth step
@@ -1405,8 +1403,8 @@ def _check_positions(positions, n, reference):
             raise ValueError(msg)
         rel = np.abs(pos - pos[reference])
         # outputs are float32 px per unit of position: a unit of 1e-300 overflows them, one of 1e300 rounds them to 0
-        if rel[rel > 0].min() < _POSITION_UNIT_RANGE[0] or rel.max() > _POSITION_UNIT_RANGE[1]:
-            lo, hi = _POSITION_UNIT_RANGE
+        if rel[rel > 0].min() < UNIT_SCALE_RANGE[0] or rel.max() > UNIT_SCALE_RANGE[1]:
+            lo, hi = UNIT_SCALE_RANGE
             msg = (
                 f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
                 f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
