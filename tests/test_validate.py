@@ -7,6 +7,8 @@ floats, integral ones included. NumPy scalars and 0-d numeric arrays pass.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -203,3 +205,35 @@ def test_frame_interval_outside_its_range_is_refused(entry):
             five = [np.random.default_rng(k).random((24, 32)) for k in range(5)]
             cam = PinholeCamera(30.0, 32, 24)
             dynamic_stereo(five, camera=cam, relative_motion=RigidMotion(translation=(1.0, 0.0, 0.0)), sigma_px=1.0, frame_interval=1e-300)
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        ("guided_scale", 1e300, r"guided_scale = 1e\+300 makes the guided filter's radius 4e\+300 px"),
+        ("cost_radius", 1000, r"cost_radius = 1000 px exceeds the views \(32x24 px\)"),
+        ("max_std_px", 1e-300, r"max_std_px = 1e-300 px is below any measurable standard deviation"),
+        ("noise_std", 1e300, r"noise_std = 1e\+300 is beyond any image's intensities"),
+    ],
+)
+def test_static_stereo_refuses_extreme_expert_options(option, value, message):
+    """Values that crashed (OpenCV's kernel size, float overflow) or ran without end are refused by name."""
+    from nfdepth.stereo import static_stereo
+
+    views = [np.random.default_rng(k).random((24, 32)).astype(np.float32) for k in range(3)]
+    with pytest.raises(ValueError, match=message):
+        static_stereo(views, reference=1, **{option: value})
+
+
+def test_static_stereo_reach_beyond_the_image_is_no_limit():
+    """A dense reach past the image's diagonal limits nothing, as inf does (1e300 crashed OpenCV's dilation)."""
+    from nfdepth.stereo import static_stereo
+
+    rng = np.random.default_rng(3)
+    base = rng.random((40, 60)).astype(np.float32) * 100
+    views = [np.roll(base, k, axis=1) for k in (-1, 0, 1)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a random texture: ambiguity warnings are not the point
+        far = static_stereo(views, reference=1, dense_reach_px=1e300)
+        unlimited = static_stereo(views, reference=1, dense_reach_px=np.inf)
+    np.testing.assert_array_equal(far.disparity, unlimited.disparity)

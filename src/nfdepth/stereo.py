@@ -268,7 +268,7 @@ from . import _view_fit
 from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
-from ._validate import UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -1016,6 +1016,15 @@ def _occluded_side(d, image, rows, cols, step_px, reach=_SIDE_REACH, direction=N
     return step & (near_right != looks_right)
 
 
+def _check_noise_std(noise_std) -> float:
+    """A given image-noise std: finite, >= 0 and at most 1e30 grey levels (beyond any float32 image; its square overflowed)."""
+    noise = check_nonnegative_finite("noise_std", noise_std)
+    if noise > UNIT_SCALE_RANGE[1]:
+        msg = f"noise_std = {noise:g} is beyond any image's intensities: expected at most {UNIT_SCALE_RANGE[1]:g} (in the views' grey levels)"
+        raise ValueError(msg)
+    return noise
+
+
 def _within_reach(own: np.ndarray, reach_px: float) -> np.ndarray:
     """Pixels within ``reach_px`` (Euclidean) of a pixel of ``own``."""
     r = int(np.floor(reach_px))
@@ -1635,6 +1644,9 @@ def static_stereo(
     dense_window_px = check_scale_px("dense_window_px", dense_window_px, zero_ok=False)
     select_window_px = check_scale_px("select_window_px", select_window_px, zero_ok=False)
     max_std_px = check_positive_finite("max_std_px", max_std_px)
+    if max_std_px < UNIT_SCALE_RANGE[0]:
+        msg = f"max_std_px = {max_std_px:g} px is below any measurable standard deviation: expected at least {UNIT_SCALE_RANGE[0]:g} px (default 0.5)"
+        raise ValueError(msg)
     dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
     max_edge_std_px = check_positive_or_inf("max_edge_std_px", max_edge_std_px)
     max_edge_disagreement_px = check_positive_or_inf("max_edge_disagreement_px", max_edge_disagreement_px)
@@ -1648,6 +1660,12 @@ def static_stereo(
         raise ValueError(msg)
     guided_eps = check_positive_finite("guided_eps", guided_eps)
     guided_scale = check_positive_finite("guided_scale", guided_scale)
+    if guided_scale * dense_window_px > MAX_SCALE_PX:
+        msg = (
+            f"guided_scale = {guided_scale:g} makes the guided filter's radius {guided_scale * dense_window_px:g} px "
+            f"(guided_scale x dense_window_px), beyond any image: expected at most {MAX_SCALE_PX:g} px"
+        )
+        raise ValueError(msg)
     propagate_rounds = check_int("propagate_rounds", propagate_rounds, 0)
     propagate_levels = check_int("propagate_levels", propagate_levels, 0)
     propagate_radius = check_int("propagate_radius", propagate_radius, 1)
@@ -1689,13 +1707,16 @@ def static_stereo(
     if axis == "y":
         views = [np.ascontiguousarray(v.T) for v in views]
     shape = views[0].shape
+    if cost_radius > max(shape):
+        msg = f"cost_radius = {cost_radius} px exceeds the views ({shape[1]}x{shape[0]} px): expected an aggregation window radius of a few px (default 9)"
+        raise ValueError(msg)
     if levels is None:
         levels = auto_levels(shape)
     elif levels < 1 or (min(shape) >> (levels - 1)) < 4:
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
     levels = 1 if search_range is not None else levels
-    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_nonnegative_finite("noise_std", noise_std)
+    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else _check_noise_std(noise_std)
     p1, p99 = percentiles(views[ref], [1, 99])
     spread = float(p99 - p1)
     noise_floor = max(noise, 1e-3 * spread, 1e-6)
@@ -1861,7 +1882,7 @@ def static_stereo(
         reason[(reason == Reason.OK) & at_end] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
-    if np.isfinite(dense_reach_px):
+    if dense_reach_px < math.hypot(*shape):  # a reach beyond the image's diagonal limits nothing (as inf)
         reason[(reason == Reason.OK) & ~_within_reach(info >= (s_c / max_std_px) ** 2, dense_reach_px)] = Reason.UNDETERMINABLE
 
     er, ec = np.nonzero(edge_mask)
