@@ -1674,6 +1674,9 @@ def static_stereo(
     photometric_window_px = check_scale_px("photometric_window_px", photometric_window_px)
     cost_step_px = check_positive_finite("cost_step_px", cost_step_px)
     cost_radius = check_int("cost_radius", cost_radius, 1)
+    if cost_radius > MAX_SCALE_PX:
+        msg = f"cost_radius = {cost_radius} px is beyond any image: expected an aggregation window radius of at most {MAX_SCALE_PX:g} px (default 9)"
+        raise ValueError(msg)
     cost_eps = check_positive_finite("cost_eps", cost_eps)
     cost_tau_i = check_positive_finite("cost_tau_i", cost_tau_i)
     cost_tau_g = check_positive_finite("cost_tau_g", cost_tau_g)
@@ -1707,9 +1710,6 @@ def static_stereo(
     if axis == "y":
         views = [np.ascontiguousarray(v.T) for v in views]
     shape = views[0].shape
-    if cost_radius > max(shape):
-        msg = f"cost_radius = {cost_radius} px exceeds the views ({shape[1]}x{shape[0]} px): expected an aggregation window radius of a few px (default 9)"
-        raise ValueError(msg)
     if levels is None:
         levels = auto_levels(shape)
     elif levels < 1 or (min(shape) >> (levels - 1)) < 4:
