@@ -237,3 +237,15 @@ def test_static_stereo_reach_beyond_the_image_is_no_limit():
         far = static_stereo(views, reference=1, dense_reach_px=1e300)
         unlimited = static_stereo(views, reference=1, dense_reach_px=np.inf)
     np.testing.assert_array_equal(far.disparity, unlimited.disparity)
+
+
+def test_check_int_refuses_integers_beyond_int64_kernels():
+    """border_px = 10**30 overflowed the compiled kernels' int64 (an OverflowError); integers stop at 2**53."""
+    from nfdepth.fast import normal_flow_edges
+
+    assert check_int("border_px", 2**53, 0) == 2**53
+    with pytest.raises(ValueError, match=r"border_px must be an integer from 0 to 2\*\*53, got 10000000000000000000000000000000"):
+        check_int("border_px", 10**31, 0)
+    frames = [np.random.default_rng(k).random((24, 32)).astype(np.float32) for k in range(3)]
+    with pytest.raises(ValueError, match="border_px must be an integer from 0 to 2"):
+        normal_flow_edges(frames, sigma_px=1.0, border_px=10**30)

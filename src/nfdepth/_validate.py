@@ -203,7 +203,13 @@ def check_int(name: str, value, minimum: int) -> int:
     if number < minimum:
         msg = f"{name} must be an integer >= {minimum}, got {value!r}"
         raise ValueError(msg)
+    if number > _MAX_INT:  # beyond what the compiled kernels and OpenCV take (int64, C int sizes)
+        msg = f"{name} must be an integer from {minimum} to 2**53, got {value!r}"
+        raise ValueError(msg)
     return number
+
+
+_MAX_INT = 2**53
 
 
 def check_view_index(name: str, value, count: int) -> int:
