@@ -117,6 +117,16 @@ def test_library_argument_errors(scene):
             next(depth_from_video(scene.frames, camera=scene.camera, velocity=STEP, **{name: bad}))
 
 
+def test_depths_beyond_float32_are_refused(scene):
+    """A speed in extreme units puts the depths beyond float32, in which frames are returned: an error, not a map of zeros."""
+    from nfdepth.camera import PinholeCamera
+
+    cam = scene.camera
+    huge = PinholeCamera(cam.focal_px * 1e30, cam.width_px, cam.height_px)
+    with pytest.raises(ValueError, match=r"an inverse depth of .* does not fit a float32 output .*give the rig's focal length"):
+        list(depth_from_video(list(scene.frames[:3]), camera=huge, velocity=np.asarray(STEP) * 1e30))
+
+
 def test_read_video_sources(tmp_path, sequence_dir, scene):
     frames = list(read_video(sequence_dir))
     assert len(frames) == N_FRAMES and frames[0].dtype == np.float32

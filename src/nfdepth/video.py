@@ -78,10 +78,12 @@ from scipy.spatial.transform import Rotation
 from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite, check_scale_px
 from .camera import PinholeCamera
 from .depth import Reason
-from .io import READ_EXTENSIONS, ImageReadError, read_image, to_grey
+from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import estimate_noise_std
 from .pipelines import _ORDER_CHECK_MIN_POINTS, EdgeDepth, static_stereo_edges
 from .rig import Rig, RigError, VideoSpec, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
+
+_UNITS_HINT = "give the rig's focal length and camera positions or speed in units that keep depths in that range"
 
 __all__ = [
     "VideoDepthFrame",
@@ -579,6 +581,9 @@ def depth_from_video(
             jj = np.floor(res.cols[ok]).astype(np.int64)
             rho = res.inverse_depth.rho[ok]
             std = res.inverse_depth.rho_std[ok]
+            # the frames are float32: depths and inverse depths beyond it would come out inf or 0
+            to_float32_map(rho, what="an inverse depth", hint=_UNITS_HINT)
+            to_float32_map(1.0 / rho[rho != 0], what="a depth", hint=_UNITS_HINT)
             floor = min_std_px / (cam.focal_px * baseline)
             std = np.where(np.isfinite(std), np.maximum(std, floor), floor)
             rho_m[ii, jj] = rho
