@@ -490,3 +490,15 @@ def test_waxman_sinha_dis_too_small_is_a_clear_error():
     with pytest.raises(ValueError, match="DIS optical flow needs a side of at least 12 px"):
         baselines.waxman_sinha_disparity(views, reference=1)
     assert baselines.waxman_sinha_disparity(views, reference=1, method="farneback").disparity.shape == (5, 7)
+
+
+def test_view_size_problems_names_each_methods_limit():
+    from nfdepth.evaluate import view_size_problems
+
+    assert view_size_problems((288, 384), ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")) == []
+    assert view_size_problems((9, 18), ("nfdepth", "sgbm")) == ["sgbm needs views of at least 8x8 px, more than 18 px wide"]
+    assert view_size_problems((2, 2), ("nfdepth", "waxman_sinha")) == [
+        "nfdepth needs views of at least 3x3 px",
+        "waxman_sinha's DIS flow needs a side of at least 12 px",
+    ]
+    assert view_size_problems((1, 40), ("waxman_sinha_farneback",)) == ["the downsampled views need at least 2x2 px"]

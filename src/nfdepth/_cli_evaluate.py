@@ -10,7 +10,7 @@ import json
 import math
 from pathlib import Path
 
-from .evaluate import DEFAULT_METHODS, METHODS, evaluation_rows
+from .evaluate import DEFAULT_METHODS, METHODS, evaluation_rows, view_size_problems
 
 EXIT_OK = 0
 EXIT_USAGE = 2
@@ -60,25 +60,12 @@ def _check_json_path(path: str, CLIError) -> Path:
     return out
 
 
-# What each method needs of the (downsampled) views, as (test of (rows, cols), what it needs):
-# static stereo's stencils 3 px; cv2.StereoSGBM/BM 8x8 px and more columns than their
-# fewest disparities (16) and half block (5 / 15 px); DIS a side of 12 px.
-_SIZE_NEEDS = {
-    "nfdepth": (lambda h, w: min(h, w) >= 3, "nfdepth needs views of at least 3x3 px"),
-    "sgbm": (lambda h, w: min(h, w) >= 8 and w > 18, "sgbm needs views of at least 8x8 px, more than 18 px wide"),
-    "bm": (lambda h, w: min(h, w) >= 8 and w > 23, "bm needs views of at least 8x8 px, more than 23 px wide"),
-    "waxman_sinha": (lambda h, w: min(h, w) >= 2 and max(h, w) >= 12, "waxman_sinha's DIS flow needs a side of at least 12 px"),
-    "waxman_sinha_farneback": (lambda h, w: min(h, w) >= 2, "the downsampled views need at least 2x2 px"),
-}
-
-
 def _check_downsample(factor: int, scene, CLIError, methods=("nfdepth",)) -> None:
     """Refuse a ``--downsample`` factor that leaves views too small for one of ``methods`` (names the largest usable factor)."""
     h, w = scene.shape
-    needs = [_SIZE_NEEDS[m] for m in methods if m in _SIZE_NEEDS] or [_SIZE_NEEDS["waxman_sinha_farneback"]]
 
     def fails(k):
-        return [why for ok, why in needs if not ok(h // k, w // k)]
+        return view_size_problems((h // k, w // k), methods)
 
     if not fails(factor):
         return
@@ -129,11 +116,10 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
     if args.downsample < 1:
         raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
-    stereo_options = {}
-    if args.cost_step_px is not None:
-        if not (math.isfinite(args.cost_step_px) and args.cost_step_px > 0):
-            raise CLIError(f"--cost-step-px must be a positive number, got {args.cost_step_px:g}", EXIT_USAGE)
-        stereo_options["cost_step_px"] = float(args.cost_step_px)
+    from .cli import _positive
+
+    cost_step = _positive("--cost-step-px", args.cost_step_px)
+    stereo_options = {} if cost_step is None else {"cost_step_px": cost_step}
     js = _check_json_path(args.json, CLIError) if args.json else None
     maps = Path(args.maps) if args.maps else None
     if maps is not None and maps.exists() and not maps.is_dir():

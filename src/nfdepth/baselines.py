@@ -114,13 +114,25 @@ def _grey_uint8(image, name: str) -> np.ndarray:
     return a
 
 
+_MIN_PAIR_PX = 8  # the smallest side of a pair that StereoSGBM / StereoBM take here
+_MIN_DISPARITIES = 16  # OpenCV's smallest numDisparities
+_SGBM_BLOCK_PX = 5  # sgbm_disparity's default block
+_BM_BLOCK_PX = 15  # stereo_bm_disparity's default block
+_DIS_MIN_SIDE_PX = 12  # cv2.DISOpticalFlow needs a side at least this long
+
+
+def _min_width_px(block_size: int, num_disparities: int = _MIN_DISPARITIES) -> int:
+    """The narrowest view StereoSGBM / StereoBM take with ``num_disparities`` and a ``block_size`` block (see :func:`_check_width`)."""
+    return num_disparities + block_size // 2 + 1
+
+
 def _check_pair(left, right):
     l8, r8 = _as_uint8(left, "left"), _as_uint8(right, "right")
     if l8.shape != r8.shape:
         msg = f"left and right must have the same shape, got {l8.shape} and {r8.shape}"
         raise ValueError(msg)
-    if min(l8.shape[:2]) < 8:
-        msg = f"images must be at least 8x8 px, got {l8.shape[1]}x{l8.shape[0]}"
+    if min(l8.shape[:2]) < _MIN_PAIR_PX:
+        msg = f"images must be at least {_MIN_PAIR_PX}x{_MIN_PAIR_PX} px, got {l8.shape[1]}x{l8.shape[0]}"
         raise ValueError(msg)
     return l8, r8
 
@@ -151,7 +163,7 @@ def _check_num_disparities(num_disparities, width: int, max_disparity=None) -> i
 
 def _check_width(width: int, nd: int, bs: int, name: str) -> None:
     """OpenCV needs ``width - numDisparities > blockSize // 2`` (else it raises an internal error)."""
-    if width - nd <= bs // 2:
+    if width < _min_width_px(bs, nd):
         msg = (
             f"the images are {width} px wide: {name} with {nd} disparities and a {bs} px block needs more than "
             f"{nd + bs // 2} columns (use larger images, e.g. a smaller downsampling factor)"
@@ -177,7 +189,7 @@ def _from_fixed_point(raw: np.ndarray, min_disparity: int) -> np.ndarray:
 # ----------------------------------------------------------------- two-view matching
 
 
-def sgbm_disparity(left, right, *, num_disparities=None, block_size: int = 5, mode: str = "hh", max_disparity=None) -> np.ndarray:
+def sgbm_disparity(left, right, *, num_disparities=None, block_size: int = _SGBM_BLOCK_PX, mode: str = "hh", max_disparity=None) -> np.ndarray:
     """Semi-global matching (``cv2.StereoSGBM``) disparity of ``left``.
 
     ``left`` is the view further toward -X (the reference, view ``k``) and
@@ -238,7 +250,7 @@ def sgbm_disparity(left, right, *, num_disparities=None, block_size: int = 5, mo
     return _from_fixed_point(matcher.compute(l8, r8), 0)
 
 
-def stereo_bm_disparity(left, right, *, num_disparities=None, block_size: int = 15, max_disparity=None) -> np.ndarray:
+def stereo_bm_disparity(left, right, *, num_disparities=None, block_size: int = _BM_BLOCK_PX, max_disparity=None) -> np.ndarray:
     """Block matching (``cv2.StereoBM``) disparity of ``left``; conventions as :func:`sgbm_disparity`.
 
     Grey uint8 input (colour is converted), prefilter x-Sobel (OpenCV's
@@ -375,8 +387,11 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
         msg = f"all views must have the same size, got {sorted(shapes)}"
         raise ValueError(msg)
     ref8 = grey[reference]
-    if method == "dis" and max(ref8.shape[:2]) < 12:
-        msg = f"the views are {ref8.shape[1]}x{ref8.shape[0]} px: DIS optical flow needs a side of at least 12 px (method='farneback' takes smaller ones)"
+    if method == "dis" and max(ref8.shape[:2]) < _DIS_MIN_SIDE_PX:
+        msg = (
+            f"the views are {ref8.shape[1]}x{ref8.shape[0]} px: DIS optical flow needs a side of at least {_DIS_MIN_SIDE_PX} px "
+            "(method='farneback' takes smaller ones)"
+        )
         raise ValueError(msg)
     t = pos - pos[reference]
     order = sorted((k for k in range(n) if k != reference), key=lambda k: (abs(t[k]), k))

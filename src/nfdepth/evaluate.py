@@ -50,6 +50,7 @@ __all__ = [
     "depth_step_mask",
     "photometric_truth_offset",
     "select_views",
+    "view_size_problems",
     "evaluate_scene",
     "resolve_dataset",
     "evaluate_dataset",
@@ -390,6 +391,32 @@ def _check_methods(methods) -> tuple:
         msg = f"methods must be one or more of {', '.join(METHODS)}, got {', '.join(map(str, bad)) or 'none'}"
         raise ValueError(msg)
     return tuple(dict.fromkeys(methods))
+
+
+def view_size_problems(shape, methods=DEFAULT_METHODS) -> list:
+    """What views of ``shape`` (rows, cols) lack for each of ``methods``, one phrase each; empty when every one can run.
+
+    From the methods' own limits: static stereo's 3 px stencils; StereoSGBM /
+    StereoBM's 8 px pairs, their fewest disparities and default blocks;
+    DIS's 12 px side; any view at least 2 x 2 px.
+    """
+    from . import baselines as b
+    from .stereo import _MIN_SIZE_PX
+
+    h, w = shape
+    problems = []
+    for m in _check_methods(methods):
+        if m == "nfdepth" and min(h, w) < _MIN_SIZE_PX:
+            problems.append(f"nfdepth needs views of at least {_MIN_SIZE_PX}x{_MIN_SIZE_PX} px")
+        elif m in ("sgbm", "bm"):
+            wide = b._min_width_px(b._SGBM_BLOCK_PX if m == "sgbm" else b._BM_BLOCK_PX)
+            if min(h, w) < b._MIN_PAIR_PX or w < wide:
+                problems.append(f"{m} needs views of at least {b._MIN_PAIR_PX}x{b._MIN_PAIR_PX} px, more than {wide - 1} px wide")
+        elif m == "waxman_sinha" and (min(h, w) < 2 or max(h, w) < b._DIS_MIN_SIDE_PX):
+            problems.append(f"waxman_sinha's DIS flow needs a side of at least {b._DIS_MIN_SIDE_PX} px")
+    if min(h, w) < 2 and not problems:
+        problems.append("the downsampled views need at least 2x2 px")
+    return problems
 
 
 def _run_peer(method: str, scene, max_disparity):
