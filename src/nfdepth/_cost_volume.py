@@ -45,6 +45,7 @@ import cv2
 import numpy as np
 
 from . import fast as _fast
+from ._scratch import STEREO as _SCRATCH
 
 try:  # optional compiled kernels; the NumPy/OpenCV path otherwise
     from numba import njit as _njit
@@ -284,9 +285,10 @@ def _row_strips(h, radius):
 
 def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px, threads=1):
     """:func:`best_disparity` with the fused numba kernels (see the module docstring), strips on ``threads`` threads."""
-    fi = np.stack([f[0] for f in feats]).astype(np.float32, copy=False)
-    fg = np.stack([f[1] for f in feats]).astype(np.float32, copy=False)
-    _, h, w = fi.shape
+    h, w = feats[0][0].shape
+    # the views' features stacked (scratch: read by the kernels only)
+    fi = np.stack([f[0] for f in feats], out=_SCRATCH.empty("intensity", (len(feats), h, w)))
+    fg = np.stack([f[1] for f in feats], out=_SCRATCH.empty("gradient", (len(feats), h, w)))
     r = agg.r
     sides = [np.asarray(ks, np.int64) for ks in _sides(t, ref)]
     shifts = [[np.array([float(t[k]) * float(dj) for k in ks], np.float64) for ks in sides] for dj in candidates]
@@ -312,14 +314,8 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
         ya, yb = max(0, y0 - r), min(h, y1 + r)
         yp, yq = max(0, y0 - 2 * r), min(h, y1 + 2 * r)
         init_ab, init_out = _window_rows(ya, h, r), _window_rows(y0, h, r)
-        # one plane per side
         two = len(sides) == 2
-        p, q = np.empty((2, yq - yp, w), f32), np.empty((2, yq - yp, w), f32)
-        a, b = np.empty((2, yb - ya, w), f32), np.empty((2, yb - ya, w), f32)
-        colcnt = np.empty((2, w), f32)
-        # candidates j0 .. j0 + K - 1, one row plane each; one buffer, refilled
-        buf = np.empty((y1 - y0, min(_CHUNK, n), w), f32)
-        idx, state = _nb_wta_state((y1 - y0, w), m)  # the strip's own (first touched by its thread)
+        p, q, a, b, colcnt, buf, idx, state = _strip_scratch(yq - yp, yb - ya, y1 - y0, min(_CHUNK, n), w, m)
         for j0 in range(0, n, buf.shape[1]):
             if stop.is_set():
                 return
@@ -330,8 +326,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
                 _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya, two)
                 _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, y0, y1, ya, two)
             _nb_wta_chunk(buf, count, j0, m, idx, state)
-        for o, v in zip(out, _nb_wta_result(idx, state, candidates, step, m, exclude_px)):
-            o[y0:y1] = v
+        _nb_wta_result(idx, state, candidates, step, m, exclude_px, [o[y0:y1] for o in out])
 
     strips = _row_strips(h, r)
     # the kernels (and NumPy's loops of the finish) release the GIL; each strip
@@ -346,16 +341,42 @@ def _window_rows(y, n, r):
     return np.array([cv2.borderInterpolate(i, n, cv2.BORDER_REFLECT) for i in range(y - r, y + r + 1)], np.int64)
 
 
+def _strip_scratch(rows_cost, rows_coeff, rows_out, chunk, w, m):
+    """One strip's scratch of :func:`_nb_best_disparity`, kept by the thread that runs it (:mod:`nfdepth._scratch`).
+
+    Allocated anew for every strip, these cost about 4400 page faults per
+    640 x 480 call (about 60 B per pixel of a strip).
+
+    ``p, q`` (per side, the costs and their products with the guide, over
+    ``rows_cost``), ``a, b`` (the guided coefficients, ``rows_coeff``), the
+    column counts, the chunk of aggregated slices, and the winner-take-all
+    index and state in :func:`_nb_wta_state`'s layout, initialised.
+    """
+    f32 = np.float32
+    bufs = [_SCRATCH.empty(name, (2, rows, w), f32) for name, rows in (("p", rows_cost), ("q", rows_cost), ("a", rows_coeff), ("b", rows_coeff))]
+    bufs.append(_SCRATCH.empty("colcnt", (2, w), f32))
+    bufs.append(_SCRATCH.empty("chunk", (rows_out, chunk, w), f32))  # candidates j0 .. j0 + chunk - 1, one row plane each
+    idx, state = _SCRATCH.empty("idx", (rows_out, w), np.int32), _SCRATCH.empty("state", (rows_out, _wta_planes(m), w), f32)
+    idx.fill(0)
+    state.fill(np.inf)
+    return (*bufs, idx, state)
+
+
+def _wta_planes(m):
+    """Planes per row of :func:`_nb_wta_chunk`'s state: best, prefix minimum, far minimum, the ``2 m - 1`` costs around the winner, the ring of ``m`` slices."""
+    return 3 + (2 * m - 1) + m
+
+
 def _nb_wta_state(shape, m):
     """Winner index and the per-row state planes of :func:`_nb_wta_chunk`, initialised."""
-    # per row: best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
     h, w = shape
-    return np.zeros(shape, np.int32), np.full((h, 3 + (2 * m - 1) + m, w), np.inf, np.float32)
+    return np.zeros(shape, np.int32), np.full((h, _wta_planes(m), w), np.inf, np.float32)
 
 
-def _nb_wta_result(idx, state, candidates, step, m, exclude_px):
-    """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (as :func:`_wta_finish`)."""
-    out = [np.empty(idx.shape, np.float32) for _ in range(3)]
+def _nb_wta_result(idx, state, candidates, step, m, exclude_px, out=None):
+    """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (as :func:`_wta_finish`), into ``out`` if given."""
+    if out is None:
+        out = [np.empty(idx.shape, np.float32) for _ in range(3)]
     # float32 as NumPy computes _wta_finish: a Python float step and exclude_px are weak scalars
     _nb_wta_finish(idx, state, np.asarray(candidates, np.float32), np.float32(step), m, np.float32(exclude_px), *out)
     return tuple(out)

@@ -191,9 +191,10 @@ def _cases(frames, *, include_reference: bool, include_stereo: bool = True):
 
 
 def _peak_bytes(fn) -> int:
-    from . import fast
+    from . import _scratch, fast
 
     fast._local.ws = None  # count the workspace too
+    _scratch.STEREO.forget()  # and static stereo's kept scratch
     tracemalloc.start()
     try:
         tracemalloc.reset_peak()

@@ -268,6 +268,7 @@ from . import _view_fit
 from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
+from ._scratch import STEREO as _SCRATCH
 from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
 from .depth import Reason
 from .edges import select_edge_points
@@ -769,7 +770,7 @@ def _occlusion_weights(t, ref, diffs, inside, floor, window_px):
 
 def _occlusion_weights_stacked(diffs, inside, floor, window_px):
     """:func:`_occlusion_weights` of the views stacked along axis 0 (the reference left out), compiled (bit-identical)."""
-    energy = np.empty_like(diffs)
+    energy = _SCRATCH.empty("energy", diffs.shape)
     for j, diff in enumerate(diffs):
         energy[j] = _blur(diff * diff, window_px)
     out = np.empty_like(diffs)
@@ -822,8 +823,8 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, reference, offset_win
     compiled = _fast.USE_NUMBA and _view_fit._njit is not None
     # per view (reference left out), stacked for the compiled fit; the lists
     # (None at the reference) are views of these for the NumPy fit
-    stack_d, stack_in = np.empty((2, len(views), h, w), np.float32)
-    stack_gc, stack_gr = np.empty((2, len(views), h, w), np.float32) if compiled else (None, None)
+    stack_d, stack_in = _SCRATCH.empty("measure", (2, len(views), h, w))
+    stack_gc, stack_gr = _SCRATCH.empty("measure_grad", (2, len(views), h, w)) if compiled else (None, None)
     diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
     for j, k in enumerate(views):
         map_x = (cols - t[k] * d_nodes).astype(np.float32)
