@@ -37,6 +37,7 @@ range.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import threading
@@ -356,21 +357,18 @@ def _strip_scratch(rows_cost, rows_coeff, rows_out, chunk, w, m):
     bufs = [_SCRATCH.empty(name, (2, rows, w), f32) for name, rows in (("p", rows_cost), ("q", rows_cost), ("a", rows_coeff), ("b", rows_coeff))]
     bufs.append(_SCRATCH.empty("colcnt", (2, w), f32))
     bufs.append(_SCRATCH.empty("chunk", (rows_out, chunk, w), f32))  # candidates j0 .. j0 + chunk - 1, one row plane each
-    idx, state = _SCRATCH.empty("idx", (rows_out, w), np.int32), _SCRATCH.empty("state", (rows_out, _wta_planes(m), w), f32)
+    return (*bufs, *_nb_wta_state((rows_out, w), m, scratch=_SCRATCH))
+
+
+def _nb_wta_state(shape, m, *, scratch=None):
+    """Winner index and the per-row state planes of :func:`_nb_wta_chunk`, initialised (the arrays from ``scratch`` if given)."""
+    # per row: best, prefix minimum, far minimum, the 2 m - 1 costs around the winner, the ring of m slices
+    h, w = shape
+    empty = np.empty if scratch is None else functools.partial(scratch.empty, "wta")
+    idx, state = empty((h, w), np.int32), empty((h, 3 + (2 * m - 1) + m, w), np.float32)
     idx.fill(0)
     state.fill(np.inf)
-    return (*bufs, idx, state)
-
-
-def _wta_planes(m):
-    """Planes per row of :func:`_nb_wta_chunk`'s state: best, prefix minimum, far minimum, the ``2 m - 1`` costs around the winner, the ring of ``m`` slices."""
-    return 3 + (2 * m - 1) + m
-
-
-def _nb_wta_state(shape, m):
-    """Winner index and the per-row state planes of :func:`_nb_wta_chunk`, initialised."""
-    h, w = shape
-    return np.zeros(shape, np.int32), np.full((h, _wta_planes(m), w), np.inf, np.float32)
+    return idx, state
 
 
 def _nb_wta_result(idx, state, candidates, step, m, exclude_px, out=None):
