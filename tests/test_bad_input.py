@@ -24,10 +24,11 @@ import numpy as np
 import pytest
 
 import nfdepth as nf
-from nfdepth import _validate, io, stereo, synthetic
+from nfdepth import _validate, fast, io, stereo, synthetic
 from nfdepth.cli import main
 from nfdepth.depth import Reason
 from nfdepth.io import ImageReadError, OutputExistsError, OutputWriteError
+from nfdepth.normal_flow import noise_gains
 
 RIGHT = nf.RigidMotion(translation=(-1.0, 0.0, 0.0))
 CAM32 = nf.PinholeCamera(100.0, 32, 32)
@@ -170,6 +171,30 @@ BAD_LIBRARY_CALLS = [
     ("stereo min_cos", _call(stereo.static_stereo, STEREO3, reference=1, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2"),
     ("stereo corner ratio", _call(stereo.static_stereo, STEREO3, reference=1, max_corner_ratio=-0.1), ValueError, "max_corner_ratio must be within [0, 1], got -0.1"),
     ("stereo levels", _call(stereo.static_stereo, STEREO3, reference=1, levels=99), ValueError, "levels must be >= 1 and leave at least 4 px at the coarsest level, got 99"),
+    # thresholds and ridges meet float32 maps; counts are passes over the image
+    ("edges gradient huge", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, min_gradient=1e300), ValueError, "min_gradient = 1e+300 is beyond the float32 maps it applies to: expected at most 1e+30"),
+    ("edges relative huge", _call(nf.select_edge_points, nf.normal_flow(VIEWS3), TEX, relative_gradient=1e300), ValueError, "relative_gradient = 1e+300 is beyond the float32 maps"),
+    ("fast gradient huge", _call(fast.normal_flow_edges, VIEWS3, sigma_px=1.0, min_gradient=1e300), ValueError, "min_gradient = 1e+300 is beyond the float32 maps"),
+    ("fast relative huge", _call(fast.normal_flow_edges, VIEWS3, sigma_px=1.0, relative_gradient=1e300), ValueError, "relative_gradient = 1e+300 is beyond the float32 maps"),
+    ("noise gains frames", _call(noise_gains, sigma_px=2.0, n_frames=5), ValueError, "n_frames must be 2 (the two-image variant) or 3 (a triple), got 5"),
+    ("noise gains frames bool", _call(noise_gains, sigma_px=2.0, n_frames=True), TypeError, "n_frames must be an integer >= 2, got True (bool, not a number)"),
+    ("dyn noise huge", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, noise_std=1e300), ValueError, "noise_std = 1e+300 is beyond any image's intensities: expected at most 1e+30"),
+    ("dyn interval huge", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, frame_interval=1e30), ValueError, "frame_interval = 1e+30 is outside 1e-30..5e+29 (the moving camera's frames 1, 3, 5 are two intervals apart)"),
+    ("static noise huge", _call(nf.static_stereo_edges, VIEWS3, camera=CAM32, baseline=1.0, noise_std=1e300), ValueError, "noise_std = 1e+300 is beyond any image's intensities"),
+    ("static baseline huge", _call(nf.static_stereo_edges, VIEWS3, camera=CAM32, baseline=1e300), ValueError, "baseline = 1e+300 is outside 1e-30..1e+30: give it in a unit that keeps it there"),
+    ("static baseline tiny", _call(nf.static_stereo_edges, VIEWS3, camera=CAM32, baseline=1e-300), ValueError, "baseline = 1e-300 is outside 1e-30..1e+30"),
+    ("stereo gradient huge", _call(stereo.static_stereo, STEREO3, reference=1, min_gradient=1e300), ValueError, "min_gradient = 1e+300 is beyond the float32 maps it applies to: expected at most 1e+30"),
+    ("stereo std huge", _call(stereo.static_stereo, STEREO3, reference=1, max_std_px=1e39), ValueError, "max_std_px = 1e+39 is beyond the float32 maps it applies to: expected at most 1e+30"),
+    ("stereo edge std huge", _call(stereo.static_stereo, STEREO3, reference=1, max_edge_std_px=1e300), ValueError, "max_edge_std_px = 1e+300 is beyond the float32 maps it applies to: expected at most 1e+30; give inf for no limit"),
+    ("stereo guided eps huge", _call(stereo.static_stereo, STEREO3, reference=1, guided_eps=1e300), ValueError, "guided_eps = 1e+300 is beyond the float32 maps"),
+    ("stereo cost eps huge", _call(stereo.static_stereo, STEREO3, reference=1, cost_eps=1e300), ValueError, "cost_eps = 1e+300 is beyond the float32 maps"),
+    ("stereo cost tau huge", _call(stereo.static_stereo, STEREO3, reference=1, cost_tau_g=1e300), ValueError, "cost_tau_g = 1e+300 is beyond the float32 maps"),
+    ("stereo margin huge", _call(stereo.static_stereo, STEREO3, reference=1, edge_cost_margin=1e300), ValueError, "edge_cost_margin = 1e+300 is beyond the float32 maps"),
+    ("stereo edge step huge", _call(stereo.static_stereo, STEREO3, reference=1, edge_step_px=1e300), ValueError, "edge_step_px = 1e+300 is beyond the float32 maps"),
+    ("stereo iterations huge", _call(stereo.static_stereo, STEREO3, reference=1, iterations_per_level=10**9), ValueError, "iterations_per_level = 1000000000 is more iterations than can help (each is a pass over the image; a few suffice): expected 1 to 1000"),
+    ("stereo rounds huge", _call(stereo.static_stereo, STEREO3, reference=1, propagate_rounds=1001), ValueError, "propagate_rounds = 1001 is more iterations than can help"),
+    ("stereo polish huge", _call(stereo.static_stereo, STEREO3, reference=1, polish_iterations=10**6), ValueError, "polish_iterations = 1000000 is more iterations than can help"),
+    ("stereo edge iterations huge", _call(stereo.static_stereo, STEREO3, reference=1, edge_iterations=10**9), ValueError, "edge_iterations = 1000000000 is more iterations than can help"),
     ("stereo nan pixel", _call(stereo.static_stereo, [TEX, TEX, np.full((32, 32), np.nan)], reference=1), ValueError, "views[2] contains 1024 non-finite"),
     ("stereo depth focal", _call(lambda: stereo.static_stereo(STEREO3, reference=1).depth(focal_px=0.0, baseline=1.0)), ValueError, "focal_px must be a positive finite number, got 0.0"),
     ("stereo depth baseline", _call(lambda: stereo.static_stereo(STEREO3, reference=1).depth(focal_px=1.0, baseline=0.0)), ValueError, "baseline must be a positive finite number, got 0.0"),
@@ -324,6 +349,60 @@ def test_dense_stereo_on_constant_views_gives_no_numbers():
         res = stereo.static_stereo([flat] * 3, reference=1)
     assert not res.edge_mask.any()
     assert not np.isfinite(res.disparity).any() and not np.isfinite(res.uncertainty).any()
+
+
+def test_dense_stereo_takes_extreme_but_valid_options_quietly():
+    """Limits of the expert options: the largest accepted threshold, the smallest window and step, no limit.
+
+    pytest turns warnings into errors here, so NumPy's overflow or division
+    warnings (float32 casts of 1e300) would fail these calls.
+    """
+    for options in ({"max_std_px": 1e30, "guided_eps": 1e30, "cost_eps": 1e30, "edge_step_px": 1e30}, {"max_edge_std_px": np.inf, "max_edge_disagreement_px": np.inf}, {"dense_window_px": 1e-300, "select_window_px": 1e-300}):
+        res = stereo.static_stereo(STEREO3, reference=1, **options)
+        assert np.isfinite(res.disparity).any(), options
+        assert np.all(res.uncertainty[np.isfinite(res.disparity)] > 0), options
+    # a step of 1e-300 px is searched at the widest step 512 candidates allow, as the warning says
+    with pytest.warns(UserWarning, match=r"holds more than 512 candidates at cost_step_px = 1e-300 px: searched in"):
+        res = stereo.static_stereo(STEREO3, reference=1, cost_step_px=1e-300)
+    assert np.isfinite(res.disparity).any()
+    # a given min_gradient above every edge is named in the warning
+    with pytest.warns(UserWarning, match=r"^no edge points: the images are textureless \(no zero crossing reaches the gradient threshold 1e\+30 nor float32 rounding's; lower min_gradient / relative_gradient if that is too high\); no depth can be measured$"):
+        res = stereo.static_stereo(STEREO3, reference=1, min_gradient=1e30)
+    assert not res.edge_mask.any()
+
+
+def test_edge_pipelines_say_which_rule_left_no_edge_points():
+    """The warning names the rule that left no edge point, not "textureless" when an option rejected them all."""
+    scene = synthetic.paper_dynamic_sequence(1, image_size_px=120)
+    run = {"camera": scene.camera, "relative_motion": scene.relative_motion, "noise_std": 0.0}
+    with pytest.warns(UserWarning, match=r"^no edge points: all \d+ strong zero crossings in the reference image of shape \(120, 120\) are corners \(raise max_corner_ratio to keep some\); the result is empty$"):
+        assert len(nf.dynamic_stereo(scene.frames, max_corner_ratio=0.0, **run)) == 0
+    with pytest.warns(UserWarning, match=r"^no edge points: the images are textureless \(no zero crossing in the reference image of shape \(120, 120\) reaches the gradient threshold 1e\+30"):
+        assert len(nf.dynamic_stereo(scene.frames, min_gradient=1e30, **run)) == 0
+    from nfdepth.edges import _no_edge_points_message
+
+    field = nf.normal_flow(scene.frames[1:4], sigma_px=2.0)
+    middle = nf.gaussian_smooth(scene.frames[2], sigma_px=2.0)
+    inside_only = nf.select_edge_points(field, middle, border_px=60)  # 119 x 119 cells: no cell is 60 from every side
+    assert not inside_only.mask.any()
+    assert _no_edge_points_message(inside_only).endswith("strong zero crossings all lie within border_px of the border")
+
+
+def test_edge_pipelines_take_extreme_but_valid_scales():
+    """A frame interval of 1e-30 (flows of ~1e30 px per unit time) and a direction of 1e-300 or 1e300 run without NumPy warnings."""
+    scene = synthetic.paper_dynamic_sequence(1, image_size_px=120)
+    ref = nf.dynamic_stereo(scene.frames, camera=scene.camera, relative_motion=scene.relative_motion, noise_std=0.5)
+    fast_clock = nf.dynamic_stereo(scene.frames, camera=scene.camera, relative_motion=scene.relative_motion, noise_std=0.5, frame_interval=1e-30)
+    # the same points; a motion per 1e-30 time units is 1e30 times faster, so inverse depth scales by 1e-30
+    np.testing.assert_array_equal(fast_clock.rows, ref.rows)
+    ok = ref.valid & fast_clock.valid
+    assert ok.sum() > 0.9 * ref.valid.sum()
+    np.testing.assert_allclose(fast_clock.inverse_depth.rho[ok] * 1e-30, ref.inverse_depth.rho[ok], rtol=1e-4)
+    views = synthetic.paper_static_sequence(n_views=3, image_size_px=120)
+    along_x = nf.static_stereo_edges(views.frames, camera=views.camera, baseline=2.0, noise_std=0.0)
+    for direction in [(1e-300, 0.0, 0.0), (1e300, 0.0, 0.0), (5e-324, 0.0, 0.0)]:
+        res = nf.static_stereo_edges(views.frames, camera=views.camera, baseline=2.0, noise_std=0.0, direction=direction)
+        np.testing.assert_array_equal(res.depth, along_x.depth)
 
 
 # ----------------------------------------------------------------- file input
@@ -569,9 +648,11 @@ def _cli_cases(tmp: Path, v):
         ("focal negative", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "-10", "--baseline", "1"], 2, "--focal-px must be a positive number, got -10"),
         ("baseline zero", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10", "--baseline", "0"], 2, "--baseline must be a positive number, got 0"),
         ("focal without baseline", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "10"], 2, "--focal-px and --baseline go together"),
-        ("focal baseline overflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e300", "--baseline", "1e300"], 2, "--focal-px 1e+300 times --baseline 1e+300 is outside the floating-point range"),
+        ("focal baseline overflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e300", "--baseline", "1e300"], 2, "--focal-px = 1e+300 is outside 1e-30..1e+30: give it in a unit that keeps it there (depths are written as float32)"),
+        ("focal overflow alone", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e300", "--baseline", "2"], 2, "--focal-px = 1e+300 is outside 1e-30..1e+30"),  # printed an overflow warning first
+        ("baseline overflow alone", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "100", "--baseline", "1e300"], 2, "--baseline = 1e+300 is outside 1e-30..1e+30"),
         ("depth beyond float32", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e20", "--baseline", "1e20"], 2, "does not fit a float32 output (about 1e-45 to 3.4e38): give --focal-px and --baseline"),
-        ("focal baseline underflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e-300", "--baseline", "1e-300"], 2, "--focal-px 1e-300 times --baseline 1e-300 is outside the floating-point range"),
+        ("focal baseline underflow", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "1e-300", "--baseline", "1e-300"], 2, "--focal-px = 1e-300 is outside 1e-30..1e+30"),
         ("ply without depth", ["stereo", v0, v1, v2, "--out", out, "--ply", str(tmp / "p.ply")], 2, "--ply needs --focal-px and --baseline"),
         ("reference range", ["stereo", v0, v1, v2, "--out", out, "--reference", "3"], 2, "--reference must index one of the 3 views (0..2), got 3"),
         ("stereo threads", ["stereo", v0, v1, v2, "--out", out, "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
@@ -604,6 +685,8 @@ def _cli_cases(tmp: Path, v):
         ("view range", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "5", "--vmax", "1"], 2, "vmax must be >= vmin"),
         ("bench json", ["bench", "--json", str(tmp / "b.txt")], 2, "--json '" + str(tmp / "b.txt") + "' must end in one of .json"),
         ("bench threads", ["bench", "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
+        # OpenCV starts as many workers as asked for: 10**9 ran the machine out of processes
+        ("bench threads huge", ["bench", "--threads", "1000000000"], 2, "--threads = 1000000000 is more than this machine's"),
         ("reproduce noise", ["reproduce", "--noise", "-1"], 2, "--noise must be a finite number >= 0"),
         ("reproduce noise huge", ["reproduce", "--only", "exp1", "--noise", "1e300"], 2, "noise_std = 1e+300 grey levels is beyond any image: expected at most 1e+06"),
         ("reproduce json folder", ["reproduce", "--only", "exp1", "--json", str(tmp / "nodir" / "r.json")], 4, "does not exist"),
@@ -626,6 +709,18 @@ def test_cli_bad_input_one_line_and_exit_code(tmp_path, views_on_disk, capfd):
         if not ok:
             failures.append(f"{name}: exit {got} (want {code}), stderr {err!r}")
     assert not failures, "\n".join(failures)
+
+
+def test_cli_reads_negative_numbers_in_exponent_form():
+    """argparse took "-1e1" for an unknown option ("expected 2 arguments"); a negative value may be written in any float form."""
+    from nfdepth.cli import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["stereo", "a.png", "b.png", "c.png", "--out", "o.pfm", "--disparity-range", "-1e1", "8", "--positions", "-1e30", "0", "1.5E+30"])
+    assert args.disparity_range == [-10.0, 8.0] and args.positions == [-1e30, 0.0, 1.5e30]
+    args = parser.parse_args(["stereo", "a.png", "b.png", "--out", "o.pfm", "--disparity-range", "-.5", "-2."])
+    assert args.disparity_range == [-0.5, -2.0]
+    assert main(["stereo", "a.png", "b.png", "--out", "o.pfm", "--disparity-range", "-e1", "8"]) == 2  # no number: still an unknown option
 
 
 def test_cli_image_too_large(tmp_path, views_on_disk, capfd, monkeypatch):

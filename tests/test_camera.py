@@ -116,3 +116,38 @@ def test_bad_motion():
         RigidMotion(translation=(1, 2))
     with pytest.raises(ValueError, match="rotation must be finite"):
         RigidMotion(rotation=(0, np.nan, 0))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"focal_px": 1e300}, r"^focal_px = 1e\+300 is outside 1e-30\.\.1e\+30: expected a focal length in pixels in that range"),
+        ({"focal_px": 1e-300}, r"^focal_px = 1e-300 is outside 1e-30\.\.1e\+30"),
+        ({"cx_px": 1e300}, r"^cx_px = 1e\+300 px: expected a principal point within 1e\+06 px of the image centre 4\.5 \(the larger of 1e\+06 px and 100 image sizes"),
+        ({"cy_px": -1e6 - 4.6}, r"^cy_px = -1e\+06 px: expected a principal point within 1e\+06 px of the image centre 4\.5"),
+        ({"cx_px": 2.01e6, "width_px": 20000, "height_px": 10}, r"^cx_px = 2\.01e\+06 px: expected a principal point within 2e\+06 px of the image centre 9999\.5"),
+    ],
+)
+def test_camera_beyond_the_float_range(kwargs, match):
+    """Were accepted (a focal length of 1e-300 px then overflowed in dynamic_stereo, cx = 1e300 gave overflow warnings and an empty map)."""
+    with pytest.raises(ValueError, match=match):
+        PinholeCamera(**{"focal_px": 100.0, "width_px": 10, "height_px": 10, **kwargs})
+
+
+def test_camera_range_ends_accepted():
+    for f in (1e-30, 1e30):
+        assert PinholeCamera(f, 10, 10).focal_px == f
+    cam = PinholeCamera(100.0, 10, 10, cx_px=4.5 + 1e6, cy_px=4.5 - 1e6)
+    assert (cam.cx_px, cam.cy_px) == (4.5 + 1e6, 4.5 - 1e6)
+    wide = PinholeCamera(100.0, 20000, 10, cx_px=9999.5 + 2e6)  # 100 image widths
+    assert wide.cx_px == 9999.5 + 2e6
+
+
+def test_rotation_beyond_the_float_range():
+    with pytest.raises(ValueError, match=r"^rotation = \[0, 0, 1e\+300\] rad per unit time: expected an angular velocity of at most 1e\+30 in magnitude"):
+        RigidMotion(rotation=(0.0, 0.0, 1e300))
+    with pytest.raises(ValueError, match=r"rotation = \[1e\+30, 1e\+30, 0\] rad per unit time"):  # the magnitude, not a component
+        RigidMotion(rotation=(1e30, 1e30, 0.0))
+    with pytest.raises(ValueError, match=r"rotation = \[1e\+308, -1e\+308, 1e\+308\]"):  # its norm overflows: no warning
+        RigidMotion(rotation=(1e308, -1e308, 1e308))
+    assert RigidMotion(rotation=(0.0, 0.0, 1e30)).rotation[2] == 1e30

@@ -239,6 +239,20 @@ def test_bench_records_well_formed(backend):
         assert f"cv_sgbm_covering ({r['disparities']} disparities)" in table
 
 
+def test_bench_options_are_checked_before_anything_runs(monkeypatch):
+    """threads beyond the cores is refused before OpenCV is told (10**9 started thousands of workers)."""
+    told = []
+    monkeypatch.setattr(bench.cv2, "setNumThreads", told.append)
+    cores = os.cpu_count() or 1
+    with pytest.raises(ValueError, match=rf"^threads = {cores + 1} is more than this machine's {cores} cores .*: expected 1 to {cores}$"):
+        bench.run_benchmarks(sizes=[(60, 80)], threads=cores + 1)
+    with pytest.raises(ValueError, match=r"^repeats must be an integer >= 1, got 0$"):
+        bench.run_benchmarks(sizes=[(60, 80)], repeats=0)  # was silently 1
+    with pytest.raises(ValueError, match=r"^time_budget_s must be a number > 0 \(inf: no limit\), got -1$"):
+        bench.run_benchmarks(sizes=[(60, 80)], time_budget_s=-1)
+    assert told == []
+
+
 @pytest.mark.skipif(os.name != "posix", reason="POSIX file modes")
 def test_bench_json_is_written_atomically_with_the_outputs_mode(tmp_path, monkeypatch, backend, capsys):
     if backend == "numpy":

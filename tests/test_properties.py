@@ -214,8 +214,11 @@ def test_vector_and_camera_checks(values):
         with pytest.raises(ValueError, match="^v must "):
             _validate.as_vector3("v", values)
     for f in values:
-        if math.isfinite(f) and f > 0:
+        if math.isfinite(f) and 1e-30 <= f <= 1e30:
             assert nf.PinholeCamera(f, 4, 4).focal_px == f
+        elif math.isfinite(f) and f > 0:  # depths in float32 maps overflow or vanish beyond that range
+            with pytest.raises(ValueError, match=r"focal_px = .* is outside 1e-30\.\.1e\+30"):
+                nf.PinholeCamera(f, 4, 4)
         else:
             with pytest.raises(ValueError, match="focal_px must be a positive finite number"):
                 nf.PinholeCamera(f, 4, 4)

@@ -192,6 +192,18 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["motion"].update(crossings=[]), r"motion\.crossings = \[\]: expected a non-empty list"),
         (lambda d: d["motion"].update(crossings=4), r"motion\.crossings = 4: expected a non-empty list"),
         (lambda d: d["motion"].update(crossings=[4.5]), r"motion\.crossings = \[4\.5\]: expected a non-empty list of frame indices"),
+        # beyond the float range (were accepted: overflow warnings, then wrong messages or an empty map)
+        (lambda d: d["camera"].update(cx_px=1e300), r"^camera\.cx_px = 1e\+300: expected a principal point within 1e\+06 px of the image centre 99\.5 \(the larger of"),
+        (lambda d: d["camera"].update(cy_px=-2e6), r"^camera\.cy_px = -2000000\.0: expected a principal point within 1e\+06 px of the image centre 99\.5"),
+        (lambda d: d["motion"].update(rotation_deg=[0.0, 0.0, 1e300]),
+         r"^motion\.rotation_deg = \[0\.0, 0\.0, 1e\+300\]: expected an angular velocity of at most 90 degrees per frame interval, got 1e\+300 degrees per frame_interval = 1\.0 \(the moving camera's images"),
+        (lambda d: d["motion"].update(rotation_deg=[0.0, 0.0, 1e30]), r"^motion\.rotation_deg = \[0\.0, 0\.0, 1e\+30\]: expected an angular velocity of at most 90 degrees per frame interval"),
+        (lambda d: d["motion"].update(rotation_deg=[0.0, 0.0, 9e31], frame_interval=1e-30),  # 90 degrees per frame, but beyond RigidMotion's range
+         r"^motion\.rotation_deg = \[0\.0, 0\.0, 9e\+31\]: expected an angular velocity of at most 1e\+30 rad \(5\.73e\+31 degrees\) per unit time"),
+        (lambda d: d["motion"].update(rotation_deg=[70.0, 70.0, 0.0]), r"^motion\.rotation_deg = \[70\.0, 70\.0, 0\.0\]: expected .* got 98\.99 degrees per"),
+        (lambda d: d["motion"].update(rotation_deg=[0.0, 60.0, 0.0], frame_interval=2.0), r"^motion\.rotation_deg = \[0\.0, 60\.0, 0\.0\]: expected .* got 120 degrees per frame_interval = 2\.0"),
+        (lambda d: d["video"].pop("velocity") and d["video"].update(positions=[[0, 0, 0], [1e300, 0, 0], [2e300, 0, 0]]),
+         r"^video\.positions: the camera moves from \(0, 0, 0\) at frame 0 to \(1e\+300, 0, 0\) at frame 1, a step of 1e\+300: expected a speed of 1e-30 to 1e\+30 per frame, or 0 where it stands still"),
     ],
 )
 def test_validation_errors(edit, match):
@@ -199,6 +211,16 @@ def test_validation_errors(edit, match):
     edit(d)
     with pytest.raises(RigError, match=match):
         rig_from_dict(d)
+
+
+def test_rotation_and_principal_point_range_ends_accepted():
+    d = copy.deepcopy(BASE)
+    d["motion"].update(rotation_deg=[60.0, 60.0, 0.0])  # 84.85 degrees per frame interval, under 90 (the norm counts, not a component)
+    np.testing.assert_allclose(rig_from_dict(d).relative_motion().rotation, -np.deg2rad([60.0, 60.0, 0.0]), rtol=1e-15)
+    d["motion"].update(rotation_deg=[0.0, 0.0, 45.0], frame_interval=2.0)  # 90 degrees per frame interval
+    assert rig_from_dict(d).motion.rotation_deg.tolist() == [0.0, 0.0, 45.0]
+    d["camera"].update(cx_px=99.5 + 1e6, cy_px=99.5 - 1e6)
+    assert rig_from_dict(d).camera.cx_px == 99.5 + 1e6
 
 
 def test_stereo_direction_must_be_axis_for_stereo_command():
@@ -378,6 +400,13 @@ def _write_rig(tmp_path, text, name="rig.toml"):
         ("[camera]\nfocal_px = 100\nwidth_px = 320\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\n", 5, 2, "= 320x200 (rig.toml) does not match I1 'I1.png' (200x200)"),
         (PAPER_RIG.read_text(), 4, 2, "dynamic needs exactly 5 images"),
         ("not = [toml", 5, 2, "not valid TOML"),
+        # were: overflow warnings and exit 0 with an empty map; a negative-inverse-depth warning and a message blaming focal length and speeds
+        ("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\ncx_px = 1e300\n[motion]\nvelocity = [2, 0, 0]\n", 5, 2,
+         "camera.cx_px = 1e+300: expected a principal point within 1e+06 px of the image centre 99.5"),
+        ("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\nrotation_deg = [0, 0, 1e300]\n", 5, 2,
+         "motion.rotation_deg = [0, 0, 1e+300]: expected an angular velocity of at most 90 degrees per frame interval"),
+        ("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[motion]\nvelocity = [2, 0, 0]\nrotation_deg = [0, 0, 1e30]\n", 5, 2,
+         "motion.rotation_deg = [0, 0, 1e+30]: expected an angular velocity of at most 90 degrees per frame interval"),
     ],
 )
 def test_dynamic_cli_errors(tmp_path, capsys, paper_pngs, rig_text, n_images, code, fragment):

@@ -770,10 +770,11 @@ def test_the_same_image_twice_warns():
         static_stereo([v[1], v[1], v[1]], reference=1)
 
 
-def test_depth_refuses_a_focal_baseline_product_outside_the_float_range():
-    """focal 1e300 and baseline 1e300 wrote an all-NaN depth map, 1e-300 and 1e-300 all zeros."""
+def test_depth_refuses_focal_lengths_and_baselines_outside_the_unit_range():
+    """focal 1e300 and baseline 1e300 wrote an all-NaN depth map, 1e-300 and 1e-300 all zeros; each is held to 1e-30..1e30, as in a rig file."""
     r = static_stereo(_plane_views(2.0), reference=1)
-    for f, b in ((1e300, 1e300), (1e-300, 1e-300)):
-        with pytest.raises(ValueError, match=r"focal_px \* baseline = .* is outside the floating-point range"):
+    for f, b, name in ((1e300, 1e300, "focal_px"), (1e-300, 1e-300, "focal_px"), (100.0, 1e31, "baseline"), (1e-31, 1.0, "focal_px")):
+        with pytest.raises(ValueError, match=rf"^{name} = .* is outside 1e-30\.\.1e\+30: give it in a unit that keeps it there \(depths are written as float32\)$"):
             r.depth(focal_px=f, baseline=b)
-    assert np.nanmedian(r.depth(focal_px=1e150, baseline=1e-150)) == pytest.approx(0.5, rel=1e-3)
+    assert np.nanmedian(r.depth(focal_px=1e20, baseline=1e-20)) == pytest.approx(0.5, rel=1e-3)
+    assert np.nanmedian(r.depth(focal_px=1e30, baseline=1e-30)) == pytest.approx(0.5, rel=1e-3)

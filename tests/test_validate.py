@@ -249,3 +249,37 @@ def test_check_int_refuses_integers_beyond_int64_kernels():
     frames = [np.random.default_rng(k).random((24, 32)).astype(np.float32) for k in range(3)]
     with pytest.raises(ValueError, match="border_px must be an integer from 0 to 2"):
         normal_flow_edges(frames, sigma_px=1.0, border_px=10**30)
+
+
+def test_check_threshold_bounds_what_meets_float32_maps():
+    """Thresholds and ridges above 1e30 are refused (1e300 overflowed float32 casts: NumPy warnings, wrong tests); inf only where it means no limit."""
+    from nfdepth._validate import MAX_THRESHOLD, check_threshold
+
+    assert check_threshold("min_gradient", 0) == 0.0 and check_threshold("min_gradient", MAX_THRESHOLD) == MAX_THRESHOLD
+    assert check_threshold("max_edge_std_px", np.inf, positive=True, inf_ok=True) == np.inf
+    with pytest.raises(ValueError, match=r"^min_gradient = 1e\+300 is beyond the float32 maps it applies to: expected at most 1e\+30$"):
+        check_threshold("min_gradient", 1e300)
+    with pytest.raises(ValueError, match=r"max_edge_std_px = 1e\+39 .*; give inf for no limit$"):
+        check_threshold("max_edge_std_px", 1e39, positive=True, inf_ok=True)
+    # below the range and non-numbers: the messages of the underlying checks
+    with pytest.raises(ValueError, match=r"^cost_eps must be a positive finite number, got 0$"):
+        check_threshold("cost_eps", 0, positive=True)
+    with pytest.raises(ValueError, match=r"^min_gradient must be a finite number >= 0, got inf$"):
+        check_threshold("min_gradient", np.inf)
+    with pytest.raises(ValueError, match=r"must be a number >= 0 \(inf: no limit\), got -1"):
+        check_threshold("reach", -1, inf_ok=True)
+    with pytest.raises(TypeError, match=r"\(str, not a number\)"):
+        check_threshold("guided_eps", "0.1", positive=True)
+
+
+def test_check_iterations_stops_at_a_thousand():
+    """10**9 iterations ran for hours (each is a pass over the image); counts stop at MAX_ITERATIONS."""
+    from nfdepth._validate import MAX_ITERATIONS, check_iterations
+
+    assert check_iterations("edge_iterations", 0, 0) == 0 and check_iterations("edge_iterations", MAX_ITERATIONS, 0) == MAX_ITERATIONS
+    with pytest.raises(ValueError, match=r"^iterations_per_level = 1001 is more iterations than can help .*: expected 1 to 1000$"):
+        check_iterations("iterations_per_level", 1001, 1)
+    with pytest.raises(ValueError, match=r"^edge_iterations must be an integer >= 0, got -1$"):
+        check_iterations("edge_iterations", -1, 0)
+    with pytest.raises(TypeError, match=r"float; give an int such as 3"):
+        check_iterations("edge_iterations", 3.0, 0)

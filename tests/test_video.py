@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import cv2
@@ -122,7 +123,7 @@ def test_depths_beyond_float32_are_refused(scene):
     from nfdepth.camera import PinholeCamera
 
     cam = scene.camera
-    huge = PinholeCamera(cam.focal_px * 1e30, cam.width_px, cam.height_px)
+    huge = PinholeCamera(1e30, cam.width_px, cam.height_px)  # the largest focal length accepted
     with pytest.raises(ValueError, match=r"an inverse depth of .* does not fit a float32 output .*give the rig's focal length"):
         list(depth_from_video(list(scene.frames[:3]), camera=huge, velocity=np.asarray(STEP) * 1e30))
 
@@ -514,3 +515,110 @@ def test_video_reversed_motion_warns_once(tmp_path, capsys, scene, sequence_dir,
     poses = _static_poses(tmp_path, "fwd.csv", list(range(N_FRAMES)))
     code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", poses, "--out", tmp_path / "f.npz", "--quiet")
     assert code == 0 and err == ""
+
+
+# ------------------------------------------------------------------ large coordinates and the speed range
+
+
+def _maps(res):
+    return [res.inverse_depth, res.inverse_depth_std, res.measured_inverse_depth, res.measured_inverse_depth_std]
+
+
+def test_large_coordinates_give_the_same_depths(scene):
+    """Positions far from the origin (map coordinates) with small steps: the same depths as near the origin.
+
+    The old test refused a step below 1e-9 |position| as "not moving" (1 mm at 5e6 m); only steps lost to
+    float64 rounding (a few ulps of the coordinates) may count as standing still.
+    """
+    frames = list(scene.frames[:6])
+    near = list(depth_from_video(frames, camera=scene.camera, positions=[[k, 0, 0] for k in range(6)]))
+    # exactly representable positions: the same baselines and displacements, so bit-identical maps
+    for far in (
+        list(depth_from_video(frames, camera=scene.camera, positions=[[5e9 + k, 0, 0] for k in range(6)])),
+        list(depth_from_video(frames, camera=scene.camera, velocity=STEP, first_frame=10**9)),
+    ):
+        assert len(far) == len(near) == 4
+        for a, b in zip(near, far):
+            assert b.baseline == a.baseline == 1.0
+            for x, y in zip(_maps(a), _maps(b)):
+                np.testing.assert_array_equal(y, x)
+            np.testing.assert_array_equal(b.count, a.count)
+    assert far[0].index == 10**9 + 1 and far[0].camera_position.tolist() == [10**9 + 1.0, 0.0, 0.0]
+
+    # 1 mm steps at 5e6 (depths in the same unit, so 1000x smaller than the scene's): each position is
+    # rounded by up to ulp(5e6) / 2 = 4.7e-10, so the two-frame step 2e-3 errs by up to 9.3e-10 = 4.7e-7
+    # relative, and so do the inverse depths (rho ~ 1 / baseline), plus float32 rounding of the maps
+    # (6e-8 each): rtol 1e-6
+    mm = list(depth_from_video(frames, camera=scene.camera, positions=[[k * 1e-3, 0, 0] for k in range(6)]))
+    far = list(depth_from_video(frames, camera=scene.camera, positions=[[5e6 + k * 1e-3, 0, 0] for k in range(6)]))
+    assert len(far) == len(mm) == 4
+    for a, b in zip(mm, far):
+        assert b.baseline == pytest.approx(a.baseline, rel=4.7e-7)
+        assert np.count_nonzero(b.measured) > 300
+        np.testing.assert_array_equal(b.count, a.count)
+        for x, y in zip(_maps(a), _maps(b)):
+            np.testing.assert_array_equal(np.isfinite(y), np.isfinite(x))
+            np.testing.assert_allclose(y, x, rtol=1e-6)
+    # and the depths are the scene's, scaled to millimetres
+    np.testing.assert_allclose(far[-1].depth[far[-1].measured], 1e-3 * near[-1].depth[near[-1].measured], rtol=1e-6)
+
+
+def test_steps_lost_to_rounding_do_not_move(scene):
+    """Positions that differ by an ulp or two (rounding noise of one position) still count as standing still, and the message says so."""
+    x, d = 5e6, float(np.spacing(5e6))
+    with pytest.raises(ValueError, match=r"does not move in any of the 3 frame triples .* around frames 1-3 the positions differ by no more than"
+                       r" float64 rounding \(4 ulps of coordinates up to 5e\+06\): give them relative to a nearby origin"):
+        next(depth_from_video(list(scene.frames[:5]), camera=scene.camera, positions=[[x + k * d, 0, 0] for k in range(5)]))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"velocity": (1e300, 0, 0)}, r"velocity = \(1e\+300, 0, 0\): expected a speed of 1e-30 to 1e\+30 per frame in its largest component"),
+        ({"velocity": (1e-300, 0, 0)}, r"velocity = \(1e-300, 0, 0\): expected a speed of 1e-30 to 1e\+30 per frame"),
+        ({"positions": [[k * 1e300, 0, 0] for k in range(5)]},
+         r"positions: the camera moves from \(0, 0, 0\) at frame 0 to \(1e\+300, 0, 0\) at frame 1, a step of 1e\+300: expected a speed of 1e-30 to 1e\+30 per frame, or 0 where it stands still"),
+        ({"positions": [[0, 0, 0]] * 2 + [[0, 1e-40, 0]] * 3},
+         r"positions: the camera moves from \(0, 0, 0\) at frame 1 to \(0, 1e-40, 0\) at frame 2, a step of 1e-40: expected a speed"),
+        ({"velocity": STEP, "process_noise": 1e300}, r"process_noise = 1e\+300 is beyond the float32 maps it applies to: expected at most 1e\+30"),
+        ({"velocity": STEP, "min_std_px": 1e300}, r"min_std_px = 1e\+300 is beyond the float32 maps it applies to: expected at most 1e\+30"),
+        ({"velocity": STEP, "noise_std": 1e300}, r"noise_std = 1e\+300 is beyond any image's intensities: expected at most 1e\+30"),
+        ({"velocity": STEP, "gate": 1e300}, r"gate = 1e\+300 is beyond the float32 maps it applies to: expected at most 1e\+30"),
+    ],
+)
+def test_speeds_and_options_out_of_range_refused(scene, kwargs, match):
+    """Were: overflow warnings, then 'the camera does not move' (or overflowing variances)."""
+    with pytest.raises(ValueError, match=match):
+        next(depth_from_video(list(scene.frames[:5]), camera=scene.camera, **kwargs))
+
+
+def test_speed_range_ends_accepted(scene):
+    """The ends of the ranges run without a warning (pytest turns warnings into errors)."""
+    frames = list(scene.frames[:3])
+    (tiny,) = depth_from_video(frames, camera=scene.camera, velocity=(1e-30, 0, 0))
+    (unit,) = depth_from_video(frames, camera=scene.camera, velocity=STEP)
+    assert np.nanmedian(tiny.depth) == pytest.approx(1e-30 * np.nanmedian(unit.depth), rel=1e-6)
+    res = list(depth_from_video(frames, camera=scene.camera, velocity=STEP, process_noise=1e30, min_std_px=1e30, noise_std=1e30, gate=1e30))
+    assert np.count_nonzero(res[0].measured) > 300
+    # a central-difference step just above 1e30 (rounding of 3e30 - 1e30) is named as such, not as the pipeline's `baseline`
+    step = (3 * 1e30 - 1e30) / 2
+    assert step > 1e30
+    with pytest.raises(ValueError, match=rf"^velocity: the camera's step around frame 2 \(half the distance from frame 1 to frame 3\) is {re.escape(repr(step))}: expected a step of 1e-30 to 1e\+30"):
+        list(depth_from_video(list(scene.frames[:4]), camera=scene.camera, velocity=(1e30, 0, 0)))
+
+
+def test_video_cli_poses_beyond_the_speed_range(tmp_path, capsys, sequence_dir, rail_rig):
+    """`--poses` with x = k * 1e300: was an overflow warning and 'the camera does not move'."""
+    poses = _static_poses(tmp_path, "huge.csv", [k * 1e300 for k in range(N_FRAMES)])
+    code, stdout, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", poses, "--out", tmp_path / "h.npz", "--quiet")
+    assert code == 2, err
+    assert err.count("\n") == 1 and stdout == "", err
+    assert "poses '" in err and "huge.csv': the camera moves from (0, 0, 0) at frame 0 to (1e+300, 0, 0) at frame 1, a step of 1e+300" in err
+    assert "expected a speed of 1e-30 to 1e+30 per frame" in err
+    assert not (tmp_path / "h.npz").exists()
+    # the same in the rig's own [video] positions
+    rig = tmp_path / "far.toml"
+    rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\npositions = [[0, 0, 0], [1e300, 0, 0], [2e300, 0, 0]]\n")
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rig, "--out", tmp_path / "h.npz", "--quiet")
+    assert code == 2 and err.count("\n") == 1, err
+    assert "far.toml': video.positions: the camera moves from (0, 0, 0) at frame 0 to (1e+300, 0, 0) at frame 1" in err

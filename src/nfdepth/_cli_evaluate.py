@@ -69,7 +69,8 @@ def _check_downsample(factor: int, scene, CLIError, methods=("nfdepth",)) -> Non
 
     if not fails(factor):
         return
-    largest = next((k for k in range(factor - 1, 0, -1) if not fails(k)), None)
+    # every factor beyond the longer side leaves 0 x 0 px views (which fail): start the scan below it
+    largest = next((k for k in range(min(factor - 1, max(h, w)), 0, -1) if not fails(k)), None)
     expected = f"an integer from 1 to {largest}" if largest else "1 (no downsampling: the views are too small already)"
     raise CLIError(
         f"--downsample {factor} is too large for {scene.name} ({w}x{h} px): expected {expected} ({'; '.join(fails(factor))})",

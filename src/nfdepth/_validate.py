@@ -141,6 +141,15 @@ def check_scale_px(name: str, value, *, zero_ok: bool = True) -> float:
 UNIT_SCALE_RANGE = (1e-30, 1e30)
 
 
+def check_noise_std(name: str, value) -> float:
+    """A given image-noise std: finite, >= 0 and at most 1e30 grey levels (beyond any float32 image; its square overflows)."""
+    noise = check_nonnegative_finite(name, value)
+    if noise > UNIT_SCALE_RANGE[1]:
+        msg = f"{name} = {noise:g} is beyond any image's intensities: expected at most {UNIT_SCALE_RANGE[1]:g} (in the views' grey levels)"
+        raise ValueError(msg)
+    return noise
+
+
 def check_frame_interval(name: str, value) -> float:
     """A positive finite time step within :data:`UNIT_SCALE_RANGE` (else rescale the unit of time)."""
     x = check_positive_finite(name, value)
@@ -164,6 +173,43 @@ def check_reach(name: str, value) -> float:
 def check_positive_or_inf(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a number > 0 (``inf`` allowed: no limit)."""
     return _check_number(name, value, "a number > 0 (inf: no limit)", lambda x: x > 0)
+
+
+#: Largest finite threshold, margin or regulariser accepted for an option that is
+#: compared with or added to float32 maps: float32 ends at 3.4e38, and long before
+#: that such an option already means "never" (or "always").
+MAX_THRESHOLD = 1e30
+
+
+def check_threshold(name: str, value, *, positive: bool = False, inf_ok: bool = False) -> float:
+    """A threshold, margin or regulariser applied to float32 maps.
+
+    A number >= 0 (``> 0`` if ``positive``), finite unless ``inf_ok`` (inf: no
+    limit), and, when finite, at most :data:`MAX_THRESHOLD`: a larger one
+    would overflow the float32 arithmetic it takes part in.
+    """
+    if inf_ok:
+        x = check_positive_or_inf(name, value) if positive else check_reach(name, value)
+    else:
+        x = check_positive_finite(name, value) if positive else check_nonnegative_finite(name, value)
+    if np.isfinite(x) and x > MAX_THRESHOLD:
+        msg = f"{name} = {x:g} is beyond the float32 maps it applies to: expected at most {MAX_THRESHOLD:g}"
+        raise ValueError(msg + ("; give inf for no limit" if inf_ok else ""))
+    return x
+
+
+#: Most iterations (or rounds) accepted per loop: each is a pass over the image, and
+#: the updates settle within a few; a count beyond this is a slip that would run for hours.
+MAX_ITERATIONS = 1000
+
+
+def check_iterations(name: str, value, minimum: int) -> int:
+    """An iteration or round count: an integer from ``minimum`` to :data:`MAX_ITERATIONS`."""
+    number = check_int(name, value, minimum)
+    if number > MAX_ITERATIONS:
+        msg = f"{name} = {number} is more iterations than can help (each is a pass over the image; a few suffice): expected {minimum} to {MAX_ITERATIONS}"
+        raise ValueError(msg)
+    return number
 
 
 def check_bool(name: str, value) -> bool:

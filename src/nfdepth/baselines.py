@@ -34,7 +34,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validate import check_bool
+from ._validate import (
+    UNIT_SCALE_RANGE,
+    check_bool,
+    check_int,
+    check_positive_finite,
+    check_threshold,
+)
 
 __all__ = [
     "BaselineResult",
@@ -87,6 +93,33 @@ def _check_views_reference(views, reference) -> list:
         msg = f"reference must index one of the {n} views (0..{n - 1}), got {reference!r}"
         raise ValueError(msg)
     return views
+
+
+def _check_positions(positions, n: int, reference: int, what: str) -> np.ndarray:
+    """``positions`` (default 0, 1, ..., n - 1) as floats: ``n`` finite, strictly increasing numbers, the views
+    1e-30 to 1e30 units from the reference (:data:`UNIT_SCALE_RANGE`); ``what`` ends the message of a wrong
+    count or order ("positions must be ``what``, got ...").
+    """
+    if positions is None:
+        return np.arange(n, dtype=float)
+    pos = np.asarray(positions, dtype=float)
+    if pos.shape == (n,) and not np.all(np.isfinite(pos)):  # before the differences: inf - inf warns
+        msg = f"positions must be {n} strictly increasing finite numbers, got {positions!r}"
+        raise ValueError(msg)
+    if pos.shape != (n,) or not np.all(np.diff(pos) > 0):
+        msg = f"positions must be {what}, got {positions!r}"
+        raise ValueError(msg)
+    rel = np.abs(pos - pos[reference])
+    # disparities are per unit of position (float32): a unit of 1e-300 overflows them, one of 1e300 rounds them to 0
+    lo, hi = UNIT_SCALE_RANGE
+    if rel[rel > 0].min() < lo or rel.max() > hi:
+        msg = (
+            f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
+            f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
+        )
+        raise ValueError(msg)
+    return pos
+
 
 def _as_uint8(image, name: str) -> np.ndarray:
     a = np.asarray(image)
@@ -141,8 +174,10 @@ def default_num_disparities(width: int, max_disparity=None) -> int:
     """A multiple of 16 covering ``max_disparity`` (+10 % and 2 px margin), else ``width / 8``.
 
     Capped so that at least 16 columns remain (OpenCV leaves the first
-    ``numDisparities`` columns of the left image unmatched).
+    ``numDisparities`` columns of the left image unmatched). ``width`` is an
+    integer >= 1 (px).
     """
+    width = check_int("width", width, 1)
     if max_disparity is not None and np.isfinite(max_disparity):
         want = 1.1 * float(max_disparity) + 2.0
     else:
@@ -152,7 +187,22 @@ def default_num_disparities(width: int, max_disparity=None) -> int:
     return min(n, cap)
 
 
+def _check_max_disparity(max_disparity, width: int) -> float | None:
+    """``max_disparity`` as float: None, or a positive finite number below ``width`` (beyond it no pixel is matched)."""
+    if max_disparity is None:
+        return None
+    max_disparity = check_positive_finite("max_disparity", max_disparity)
+    if max_disparity >= width:
+        msg = (
+            f"the images are {width} px wide: max_disparity = {max_disparity:g} px is beyond them (no pixel is seen that far); "
+            f"expected a positive number below {width} (None: from the width)"
+        )
+        raise ValueError(msg)
+    return max_disparity
+
+
 def _check_num_disparities(num_disparities, width: int, max_disparity=None) -> int:
+    max_disparity = _check_max_disparity(max_disparity, width)
     if num_disparities is None:
         return default_num_disparities(width, max_disparity)
     if isinstance(num_disparities, bool) or int(num_disparities) != num_disparities or num_disparities < 16 or num_disparities % 16:
@@ -216,8 +266,9 @@ def sgbm_disparity(left, right, *, num_disparities=None, block_size: int = _SGBM
     mode : {"hh", "sgbm", "sgbm3way", "hh4"}
         OpenCV's path mode; "hh" is the full 8-path variant.
     max_disparity : float, optional
-        The largest disparity expected, used only when ``num_disparities``
-        is None.
+        The largest disparity expected (px), a positive number below the
+        width, used only when ``num_disparities`` is None (the search range
+        then ends at most 16 columns short of the width).
 
     Returns
     -------
@@ -256,7 +307,7 @@ def stereo_bm_disparity(left, right, *, num_disparities=None, block_size: int = 
     Grey uint8 input (colour is converted), prefilter x-Sobel (OpenCV's
     default), ``textureThreshold = 10``, ``uniquenessRatio = 15``, speckle
     filtering (100 px, 2 px), ``disp12MaxDiff = 1``. ``block_size`` odd,
-    5..51.
+    5..51; ``max_disparity`` a positive number below the width.
     """
     l8, r8 = _check_pair(left, right)
     l8, r8 = _grey_uint8(l8, "left"), _grey_uint8(r8, "right")
@@ -301,16 +352,14 @@ def pair_disparity_at_reference(views, *, reference: int, method: str = "sgbm", 
     if fn is None:
         msg = f"method must be 'sgbm' or 'bm', got {method!r}"
         raise ValueError(msg)
-    pos = np.arange(n, dtype=float) if positions is None else np.asarray(positions, dtype=float)
-    if pos.shape != (n,) or not np.all(np.diff(pos) > 0):
-        msg = f"positions must be {n} strictly increasing numbers, got {positions!r}"
-        raise ValueError(msg)
+    pos = _check_positions(positions, n, reference, f"{n} strictly increasing numbers")
     t0 = time.perf_counter()
     mirrored = reference == n - 1
     other = reference - 1 if mirrored else reference + 1
     spacing = abs(pos[other] - pos[reference])
     if options.get("max_disparity") is not None:
-        options = {**options, "max_disparity": options["max_disparity"] * spacing}
+        max_disparity = check_threshold("max_disparity", options["max_disparity"], positive=True)
+        options = {**options, "max_disparity": max_disparity * spacing}
     ref, oth = views[reference], views[other]
     if mirrored:
         d = fn(np.ascontiguousarray(np.asarray(ref)[:, ::-1]), np.ascontiguousarray(np.asarray(oth)[:, ::-1]), **options)[:, ::-1]
@@ -376,10 +425,7 @@ def waxman_sinha_disparity(views, *, reference: int, positions=None, method: str
         msg = f"method must be 'dis' or 'farneback', got {method!r}"
         raise ValueError(msg)
     chain = check_bool("chain", chain)
-    pos = np.arange(n, dtype=float) if positions is None else np.asarray(positions, dtype=float)
-    if pos.shape != (n,) or not np.all(np.isfinite(pos)) or not np.all(np.diff(pos) > 0):
-        msg = f"positions must be {n} strictly increasing finite numbers, got {positions!r}"
-        raise ValueError(msg)
+    pos = _check_positions(positions, n, reference, f"{n} strictly increasing finite numbers")
     t0 = time.perf_counter()
     grey = [_grey_uint8(v, f"views[{i}]") for i, v in enumerate(views)]
     shapes = {g.shape for g in grey}

@@ -56,9 +56,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ._validate import check_int, check_positive_or_inf
 from .io import atomic_write
 
-__all__ = ["DEFAULT_SIZES", "run_benchmarks", "render_markdown", "bench_main"]
+__all__ = ["DEFAULT_SIZES", "run_benchmarks", "render_markdown", "bench_main", "check_bench_threads"]
 
 DEFAULT_SIZES = ((480, 640), (960, 1280), (1920, 2560))
 SIGMA_PX = 2.0
@@ -229,6 +230,21 @@ def _stream_peak_bytes(frames) -> int:
     return int(peak)
 
 
+def check_bench_threads(threads) -> int:
+    """``threads`` for the benchmark: an integer from 1 to this machine's cores.
+
+    OpenCV starts as many workers as ``cv2.setNumThreads`` asks for (10**9 ran
+    the machine out of processes), and timings on more threads than cores
+    measure the scheduler, not the method.
+    """
+    n = check_int("threads", threads, 1)
+    cores = max(1, os.cpu_count() or 1)
+    if n > cores:
+        msg = f"threads = {n} is more than this machine's {cores} cores (timings on more threads than cores measure the scheduler): expected 1 to {cores}"
+        raise ValueError(msg)
+    return n
+
+
 def run_benchmarks(
     *,
     quick: bool = False,
@@ -250,18 +266,17 @@ def run_benchmarks(
     repeats : int, optional
         Timed rounds per size (default 20; quick 5).
     threads : int
-        ``cv2.setNumThreads`` while timing (restored afterwards).
+        ``cv2.setNumThreads`` while timing (restored afterwards); at most
+        this machine's cores (``os.cpu_count()``).
     time_budget_s : float, optional
         Per size and scene: rounds stop early (but after at least 3) once
         this much time is spent.
     """
+    threads = check_bench_threads(threads)
     if sizes is None:
         sizes = DEFAULT_SIZES[:2] if quick else DEFAULT_SIZES
-    if repeats is None:
-        repeats = 5 if quick else 20
-    repeats = max(1, int(repeats))
-    if time_budget_s is None:
-        time_budget_s = 8.0 if quick else 60.0
+    repeats = (5 if quick else 20) if repeats is None else check_int("repeats", repeats, 1)
+    time_budget_s = (8.0 if quick else 60.0) if time_budget_s is None else check_positive_or_inf("time_budget_s", time_budget_s)
     old_threads = cv2.getNumThreads()
     cv2.setNumThreads(int(threads))
     records: list[dict] = []

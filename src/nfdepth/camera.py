@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import as_vector3, check_finite, check_positive_finite
+from ._validate import UNIT_SCALE_RANGE, as_vector3, check_finite, check_positive_finite
 
 __all__ = [
     "PinholeCamera",
@@ -26,6 +26,44 @@ __all__ = [
     "normal_flow_px",
     "relative_normal_flow_coefficients",
 ]
+
+#: A principal point may lie at most this many image sizes (the larger of width
+#: and height) from the image centre, and at least :data:`PRINCIPAL_POINT_MIN_REACH_PX`
+#: px: lens shifts and crops of any real sensor stay far inside it, so a value
+#: beyond is in the wrong unit or a typo (and overflows the flow arithmetic).
+PRINCIPAL_POINT_REACH_SIZES = 100
+
+#: The smallest reach of the principal point, in px (a small crop of a large sensor).
+PRINCIPAL_POINT_MIN_REACH_PX = 1e6
+
+
+def _principal_point_reach(width_px: int, height_px: int) -> float:
+    """Largest distance (px) of the principal point from the image centre :class:`PinholeCamera` accepts."""
+    return max(PRINCIPAL_POINT_MIN_REACH_PX, PRINCIPAL_POINT_REACH_SIZES * float(max(width_px, height_px)))
+
+
+def _principal_point_expected(centre: float, reach: float) -> str:
+    """What a principal point coordinate is expected to be (the end of the messages refusing one)."""
+    return (
+        f"a principal point within {reach:g} px of the image centre {centre:g} (the larger of {PRINCIPAL_POINT_MIN_REACH_PX:g} px"
+        f" and {PRINCIPAL_POINT_REACH_SIZES} image sizes: lens shifts and crops stay far inside it; a value beyond is in"
+        " another unit or a typo)"
+    )
+
+
+#: Largest rotation between two consecutive frames accepted, in degrees (a rig's
+#: ``motion.rotation_deg`` times ``motion.frame_interval``): the moving camera's
+#: images are two frame intervals apart, and a turn of 180 degrees or more
+#: between two images cannot be told from a smaller one the other way; the
+#: small-motion method needs a few degrees per frame at most.
+MAX_ROTATION_PER_FRAME_DEG = 90.0
+
+
+def _magnitude(vec) -> float:
+    """Euclidean norm of a finite vector without overflow (inf where it exceeds the float range)."""
+    vec = np.asarray(vec, dtype=float)
+    m = float(np.max(np.abs(vec))) if vec.size else 0.0
+    return 0.0 if m == 0 else m * float(np.linalg.norm(vec / m))
 
 
 @dataclass(frozen=True)
@@ -59,7 +97,14 @@ class PinholeCamera:
     cy_px: float | None = None
 
     def __post_init__(self) -> None:
-        check_positive_finite("focal_px", self.focal_px)
+        focal = check_positive_finite("focal_px", self.focal_px)
+        lo, hi = UNIT_SCALE_RANGE
+        if not lo <= focal <= hi:
+            msg = (
+                f"focal_px = {focal:g} is outside {lo:g}..{hi:g}: expected a focal length in pixels in that range"
+                " (beyond it the normalised coordinates and depths overflow or vanish in float arithmetic)"
+            )
+            raise ValueError(msg)
         for name in ("width_px", "height_px"):
             value = getattr(self, name)
             if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
@@ -69,8 +114,13 @@ class PinholeCamera:
             object.__setattr__(self, "cx_px", (self.width_px - 1) / 2.0)
         if self.cy_px is None:
             object.__setattr__(self, "cy_px", (self.height_px - 1) / 2.0)
-        for name in ("cx_px", "cy_px"):
-            check_finite(name, getattr(self, name), unit="pixels")
+        reach = _principal_point_reach(self.width_px, self.height_px)
+        for name, size in (("cx_px", self.width_px), ("cy_px", self.height_px)):
+            value = check_finite(name, getattr(self, name), unit="pixels")
+            centre = (size - 1) / 2.0
+            if not abs(value - centre) <= reach:
+                msg = f"{name} = {value:g} px: expected {_principal_point_expected(centre, reach)}"
+                raise ValueError(msg)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -112,7 +162,8 @@ class RigidMotion:
 
     ``translation`` is ``V`` in scene units per unit time; ``rotation`` is
     ``Omega`` in radians per unit time, both in camera coordinates, so that a
-    scene point moves as ``dP/dt = V + Omega x P`` (paper eq. 1).
+    scene point moves as ``dP/dt = V + Omega x P`` (paper eq. 1). ``|Omega|``
+    is at most 1e30 (the upper end of the speeds' range).
     """
 
     translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -120,7 +171,16 @@ class RigidMotion:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "translation", as_vector3("translation", self.translation))
-        object.__setattr__(self, "rotation", as_vector3("rotation", self.rotation))
+        rotation = as_vector3("rotation", self.rotation)
+        hi = UNIT_SCALE_RANGE[1]
+        if _magnitude(rotation) > hi:
+            msg = (
+                f"rotation = [{', '.join(f'{float(w):g}' for w in rotation)}] rad per unit time: expected an angular velocity"
+                f" of at most {hi:g} in magnitude (beyond it the rotational flow overflows; a small-motion method needs a few"
+                " degrees per frame)"
+            )
+            raise ValueError(msg)
+        object.__setattr__(self, "rotation", rotation)
 
     @classmethod
     def about_center(cls, *, rotation, center, translation=(0.0, 0.0, 0.0)) -> RigidMotion:

@@ -24,6 +24,7 @@ import argparse
 import importlib
 import json
 import os
+import re
 import signal
 import sys
 import threading
@@ -81,7 +82,16 @@ def _check_out_dir(path: str, what: str = "--out") -> Path:
     return out
 
 
+#: A negative number as an option's value: argparse's own pattern knows only "-2" and
+#: "-2.5", so "-1e-3" read as an unknown option ("expected 2 arguments").
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER  # (argparse's private hook; none of our options looks like a number)
+
     def error(self, message):  # one line, exit code 2, no usage dump
         raise CLIError(f"{self.prog}: {message}", EXIT_USAGE)
 
@@ -335,7 +345,7 @@ def _positive(name: str, value):
 
 def _cmd_stereo(args) -> int:
     from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
-    from .stereo import static_stereo
+    from .stereo import check_depth_scale, static_stereo
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
@@ -366,8 +376,11 @@ def _cmd_stereo(args) -> int:
     baseline = _positive("--baseline", args.baseline)
     if (focal is None) != (baseline is None):
         raise CLIError("--focal-px and --baseline go together: give both for depth output, or neither for disparity")
-    if focal is not None and not (np.isfinite(focal * baseline) and focal * baseline >= sys.float_info.min):
-        raise CLIError(f"--focal-px {focal:g} times --baseline {baseline:g} is outside the floating-point range: give the baseline in a unit that keeps the product finite and nonzero")
+    if focal is not None:
+        try:
+            check_depth_scale(focal, baseline, names=("--focal-px", "--baseline"))
+        except ValueError as exc:
+            raise CLIError(str(exc)) from None
     if args.ply and focal is None:
         raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
     if args.threads is not None and args.threads < 1:
@@ -522,12 +535,14 @@ def _cmd_view(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from .bench import bench_main
+    from .bench import bench_main, check_bench_threads
 
     if args.json:
         _check_output(args.json, force=True, exts=(".json",), what="--json")
-    if args.threads < 1:
-        raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
+    try:
+        check_bench_threads(args.threads)
+    except ValueError as exc:
+        raise CLIError(f"--{exc}") from None
     return int(bench_main(json_path=args.json, quick=args.quick, threads=args.threads))
 
 

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import check_fraction, check_int, check_nonnegative_finite, check_scale_px
+from ._validate import check_fraction, check_int, check_scale_px, check_threshold
 from .normal_flow import GradientField
 
 #: Gradients below this fraction of the largest smoothed intensity are float32
@@ -192,6 +192,39 @@ class EdgeSelection:
     corner_ratio: np.ndarray
 
 
+def _no_edge_points_message(selection: EdgeSelection, where: str = "") -> str:
+    """Why ``selection`` holds no edge point, for a warning: the first rule that left none.
+
+    Starts "no edge points: "; ``where`` (e.g. " in the reference image")
+    follows the rule's name.
+    """
+    zero = selection.zero_crossing
+    if not zero.any():
+        return f"no edge points: the images are textureless (no zero crossing of the Laplacian{where})"
+    strong = zero & selection.strong
+    if not strong.any():
+        return (
+            f"no edge points: the images are textureless (no zero crossing{where} reaches the gradient threshold "
+            f"{selection.min_gradient:.4g} nor float32 rounding's; lower min_gradient / relative_gradient if that is too high)"
+        )
+    kept = strong & ~selection.corner
+    if not kept.any():
+        return f"no edge points: all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners (raise max_corner_ratio to keep some)"
+    return f"no edge points: the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie within border_px of the border"
+
+
+def _comparable_threshold(value: float, dtype) -> float:
+    """``value`` as a comparison with an array of ``dtype`` sees it: cast to that dtype.
+
+    The same outcome as the implicit cast (NEP 50: a Python float takes the
+    array's dtype), without NumPy's overflow warning when the value lies
+    beyond float32's range (it becomes inf), e.g. ``relative_gradient``
+    times a huge percentile.
+    """
+    with np.errstate(over="ignore"):
+        return float(np.asarray(value, dtype=np.result_type(np.dtype(dtype), np.float32)))
+
+
 def select_edge_points(
     field: GradientField,
     smoothed_middle: np.ndarray,
@@ -236,13 +269,13 @@ def select_edge_points(
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     corner_window_px = check_scale_px("corner_window_px", corner_window_px, zero_ok=False)
     if min_gradient is None:
-        relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
+        relative_gradient = check_threshold("relative_gradient", relative_gradient)
         high = float(percentile(mag, 99.0)) if mag.size else 0.0
         min_gradient = relative_gradient * high
     else:
-        min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
+        min_gradient = check_threshold("min_gradient", min_gradient)
     zero = laplacian_zero_crossings(smoothed_middle)
-    strong = (mag >= min_gradient) & (mag > rounding_gradient_floor(smoothed_middle))
+    strong = (mag >= _comparable_threshold(min_gradient, mag.dtype)) & (mag > rounding_gradient_floor(smoothed_middle))
     ratio = corner_ratio(field.grad_col, field.grad_row, window_sigma_px=corner_window_px)
     corner = ~(ratio <= max_corner_ratio)
     inside = np.zeros_like(zero)

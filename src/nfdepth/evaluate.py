@@ -40,7 +40,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validate import _check_number, check_int, check_positive_finite
+from ._validate import (
+    _check_number,
+    check_int,
+    check_nonnegative_finite,
+    check_positive_finite,
+    check_threshold,
+)
 
 __all__ = [
     "METHODS",
@@ -177,7 +183,8 @@ def depth_step_mask(truth, *, gap_px: float = 2.0, width_px: int = 9) -> np.ndar
     gap_px : float
         Disparity difference between neighbours that makes a step (> 0).
     width_px : int
-        Odd side of the square the steps are dilated by (>= 1).
+        Odd side of the square the steps are dilated by (>= 1); beyond
+        ``2 max(H, W) - 1`` it reaches every pixel from every step, as that does.
 
     Returns
     -------
@@ -202,7 +209,10 @@ def depth_step_mask(truth, *, gap_px: float = 2.0, width_px: int = 9) -> np.ndar
     step[:, :-1] |= across_cols
     step[1:, :] |= across_rows
     step[:-1, :] |= across_rows
-    return cv2.dilate(step, np.ones((width_px, width_px), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+    # a square of side 2 n - 1 centred anywhere on an n px side covers all of it: a wider one marks
+    # the same pixels (clipped per axis, so that a huge width_px needs no huge kernel)
+    rows, cols = (min(width_px, max(2 * n - 1, 1)) for n in tru.shape)
+    return cv2.dilate(step, np.ones((rows, cols), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
 
 
 def rounding_median_rel(truth, step_px) -> float:
@@ -225,13 +235,14 @@ def rounding_median_rel(truth, step_px) -> float:
     truth : array_like
         True disparities (px) of the points scored.
     step_px : float
-        Rounding step of the truth (px); 0 gives 0.
+        Rounding step of the truth (px), a finite number >= 0; 0 gives 0.
 
     Returns
     -------
     float
         NaN if no point has a finite, non-zero truth.
     """
+    step_px = check_nonnegative_finite("step_px", step_px)
     t = np.abs(np.asarray(truth, dtype=np.float64).ravel())
     t = t[np.isfinite(t) & (t > 0)]
     if t.size == 0:
@@ -246,6 +257,10 @@ def rounding_median_rel(truth, step_px) -> float:
     # F on [a_(k-1), a_k] with k points saturated: F(x) = (k + x tail[k]) / n
     k0 = int(np.argmax(k + a * tail >= 0.5 * n))
     return float((0.5 * n - k0) / tail[k0])
+
+
+_SEARCH_STEP_PX = 0.02  # photometric_truth_offset's grid step
+_SEARCH_PX_RANGE = (0.01, 10.0)  # its search_px: a grid of at least 2 points, at most about 1000
 
 
 def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gradient: float = 2.0, max_truth_range_px: float = 0.5) -> dict:
@@ -274,7 +289,14 @@ def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gr
     view : int
         Index into ``scene.views``, not the reference.
     search_px : float
-        ``delta`` is searched in ``[-search_px, search_px]`` px per view step.
+        ``delta`` is searched in ``[-search_px, search_px]`` px per view step,
+        on a grid of 0.02 px refined at the best point: 0.01 to 10 px.
+    min_gradient : float
+        Least column gradient (grey levels per px) of a pixel that counts
+        (a finite number >= 0).
+    max_truth_range_px : float
+        Largest range of the truth (px) over a pixel's 7 x 7 window for it to
+        count (a finite number >= 0).
 
     Returns
     -------
@@ -299,6 +321,15 @@ def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gr
         msg = f"view must be an index into the scene's {n} views other than the reference {ref}, got {view!r}"
         raise ValueError(msg)
     search_px = check_positive_finite("search_px", search_px)
+    lo, hi = _SEARCH_PX_RANGE
+    if not lo <= search_px <= hi:
+        msg = (
+            f"search_px = {search_px:g} px is outside {lo:g}..{hi:g} px: the offset is searched on a {_SEARCH_STEP_PX:g} px "
+            "grid over [-search_px, search_px] (at least one step wide), and a truth's offset is a fraction of a pixel (default 0.3)"
+        )
+        raise ValueError(msg)
+    check_threshold("min_gradient", min_gradient)  # checked only: compared as given, as before
+    check_threshold("max_truth_range_px", max_truth_range_px)
     steps = int(view) - ref
     # both smoothed alike (1 px Gaussian): the shift is unchanged, the bicubic
     # interpolation error of fine texture (a bias at fractional shifts) drops
@@ -332,12 +363,12 @@ def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gr
         diff = warped[inside] - values[inside]
         return float(np.mean(np.abs(diff - np.median(diff)))) if diff.size else math.inf
 
-    grid = np.linspace(-search_px, search_px, round(2 * search_px / 0.02) + 1)
+    grid = np.linspace(-search_px, search_px, round(2 * search_px / _SEARCH_STEP_PX) + 1)
     errors = [error(x) for x in grid]
     i = int(np.argmin(errors))
     spacing = grid[1] - grid[0]
     lo_b, hi_b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    best = minimize_scalar(error, bounds=(lo_b, hi_b), method="bounded", options={"xatol": 1e-4 * spacing / 0.02})
+    best = minimize_scalar(error, bounds=(lo_b, hi_b), method="bounded", options={"xatol": 1e-4 * spacing / _SEARCH_STEP_PX})
     delta = float(best.x) if best.fun <= errors[i] else float(grid[i])
     return {
         "view": int(view),
@@ -423,6 +454,12 @@ def _run_peer(method: str, scene, max_disparity):
     from . import baselines
 
     if method in ("sgbm", "bm"):
+        if max_disparity is not None:
+            # the matchers take a positive max_disparity below the views' width: the truth's largest
+            # disparity clipped to 1 .. width - 1 px gives the numDisparities it gave before (16 at the
+            # low end, the width's cap at the high end), a non-finite one the default (W / 8) as before
+            width = np.shape(scene.views[scene.reference_index])[1]
+            max_disparity = min(max(max_disparity, 1.0), width - 1) if math.isfinite(max_disparity) else None
         return baselines.pair_disparity_at_reference(
             scene.views, reference=scene.reference_index, method=method, max_disparity=max_disparity
         )
@@ -708,10 +745,11 @@ def error_map_png(path, estimate, truth, *, title: str | None = None, vmax: floa
     """Write ``|estimate - truth|`` (px) as a colour map with a colour bar.
 
     Pixels where either is unknown are black. The scale runs 0..``vmax`` px
-    (default 3 px; larger errors saturate).
+    (a positive finite number; default 3 px; larger errors saturate).
     """
     from . import plot
 
+    vmax = check_positive_finite("vmax", vmax)
     est = np.asarray(estimate, dtype=np.float64)
     tru = np.asarray(truth, dtype=np.float64)
     if est.shape != tru.shape:
@@ -719,5 +757,5 @@ def error_map_png(path, estimate, truth, *, title: str | None = None, vmax: floa
         raise ValueError(msg)
     err = np.abs(est - tru)
     err[~(np.isfinite(est) & np.isfinite(tru))] = np.nan
-    fig = plot.colormap_panel(err, title=title or "|disparity error|", unit="|error| px", vmin=0.0, vmax=float(vmax))
+    fig = plot.colormap_panel(err, title=title or "|disparity error|", unit="|error| px", vmin=0.0, vmax=vmax)
     return plot.save_figure(fig, path)

@@ -104,8 +104,8 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_nonnegative_finite, check_scale_px
-from .edges import ROUNDING_GRADIENT, _block_read_back, _corner_window_blocks
+from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_scale_px, check_threshold
+from .edges import ROUNDING_GRADIENT, _block_read_back, _comparable_threshold, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
 
 try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
@@ -179,8 +179,8 @@ def _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, 
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
         raise ValueError(msg)
     if min_gradient is not None:
-        min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
-    relative_gradient = check_nonnegative_finite("relative_gradient", relative_gradient)
+        min_gradient = check_threshold("min_gradient", min_gradient)
+    relative_gradient = check_threshold("relative_gradient", relative_gradient)
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     if corner_window_px is None:
         corner_window_px = max(sigma_px, 1.0)
@@ -639,7 +639,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
     if ncand:
         T = ws.tensor
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
-        thr, floor = np.float32(min_gradient), np.float32(_rounding_floor(G1))
+        thr, floor = np.float32(_comparable_threshold(min_gradient, np.float32)), np.float32(_rounding_floor(G1))
         flat_gc, flat_gr, flat_alpha = ws.gc.ravel(), ws.gr.ravel(), alpha.ravel()
 
         def select(i):
@@ -864,7 +864,7 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
             dst |= src[rs1, cs1]
         inner &= tmp
         m = mag[rs, cs]
-        np.greater_equal(m, min_gradient, out=tmp)  # float32 compare, as the reference (NEP 50)
+        np.greater_equal(m, _comparable_threshold(min_gradient, m.dtype), out=tmp)  # float32 compare, as the reference (NEP 50)
         inner &= tmp
         floor = _rounding_floor(G1)
         if not min_gradient > floor:

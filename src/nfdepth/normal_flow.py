@@ -48,7 +48,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_frame_interval, check_scale_px, float_dtype
+from ._validate import as_frames, as_image, check_frame_interval, check_int, check_scale_px, float_dtype
 
 __all__ = [
     "STENCILS",
@@ -323,9 +323,13 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     (``dt`` = frame interval) and of each spatial derivative, per unit
     standard deviation of independent white noise in every frame. Computed
     exactly from the effective linear filters (Gaussian, then the stencil).
+    ``n_frames``: 3 for a triple, 2 for the two-image variant.
     """
     if stencil not in STENCILS:
         msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
+        raise ValueError(msg)
+    if check_int("n_frames", n_frames, 2) not in (2, 3):
+        msg = f"n_frames must be 2 (the two-image variant) or 3 (a triple), got {n_frames!r}"
         raise ValueError(msg)
     g = _gaussian_kernel_1d(check_scale_px("sigma_px", sigma_px))
     g2 = np.outer(g, g)

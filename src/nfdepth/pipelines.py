@@ -21,16 +21,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import as_frames, check_frame_interval, check_nonnegative_finite, check_positive_finite, check_scale_px, float_dtype
+from ._validate import UNIT_SCALE_RANGE, as_frames, check_frame_interval, check_noise_std, check_positive_finite, check_scale_px, float_dtype
 from .camera import PinholeCamera, RigidMotion
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
-from .edges import EdgeSelection, select_edge_points
+from .edges import EdgeSelection, _no_edge_points_message, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
 
 __all__ = ["EdgeDepth", "dynamic_stereo", "static_stereo_edges"]
-
-#: Warning text when the reference image has no edge points at all.
-TEXTURELESS_WARNING = "no edge points: the images are textureless"
 
 #: Fewest determinable edge points before a majority with negative inverse
 #: depth is reported as a likely ordering/sign mistake.
@@ -113,14 +110,15 @@ class EdgeDepth:
 def _noise_level(noise_std, frames) -> float:
     if noise_std is None:
         return float(np.median([estimate_noise_std(f) for f in frames]))
-    return check_nonnegative_finite("noise_std", noise_std)
+    return check_noise_std("noise_std", noise_std)
 
 
 def _vn_std(field: GradientField, vn: np.ndarray, noise: float, *, sigma_px: float, stencil: str, dt: float):
     """Standard deviation of one normal-flow estimate from white image noise."""
     temporal, spatial = noise_gains(sigma_px=sigma_px, stencil=stencil)
     mag = field.magnitude
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # beyond float32 (a frame interval of 1e-30 gives flows of ~1e30 px per unit time): inf, no estimate
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         return noise * np.sqrt((temporal / dt) ** 2 + (vn * spatial) ** 2) / mag
 
 
@@ -144,8 +142,7 @@ def _edge_result(
     m = selection.mask
     if not m.any():
         warnings.warn(
-            f"{TEXTURELESS_WARNING} (no strong zero-crossing edge in the reference image of shape "
-            f"{smoothed_middle.shape}); the result is empty",
+            f"{_no_edge_points_message(selection, f' in the reference image of shape {smoothed_middle.shape}')}; the result is empty",
             UserWarning,
             stacklevel=3,
         )
@@ -278,6 +275,12 @@ def dynamic_stereo(
         )
         raise ValueError(msg)
     step = check_frame_interval("frame_interval", frame_interval)
+    if 2.0 * step > UNIT_SCALE_RANGE[1]:  # the moving camera's triple spans two intervals
+        msg = (
+            f"frame_interval = {step:g} is outside {UNIT_SCALE_RANGE[0]:g}..{0.5 * UNIT_SCALE_RANGE[1]:g} (the moving camera's "
+            "frames 1, 3, 5 are two intervals apart): give times in a unit that keeps it in that range (e.g. frames)"
+        )
+        raise ValueError(msg)
     sigma_px = check_scale_px("sigma_px", sigma_px)
     noise = _noise_level(noise_std, frames)
     s = [gaussian_smooth(f, sigma_px=sigma_px) for f in frames]
@@ -363,10 +366,17 @@ def static_stereo_edges(
     _check_min_size("views", views[0].shape)
     _check_camera(camera, views[0].shape)
     baseline = check_positive_finite("baseline", baseline)
+    lo, hi = UNIT_SCALE_RANGE
+    if not lo <= baseline <= hi:
+        msg = f"baseline = {baseline:g} is outside {lo:g}..{hi:g}: give it in a unit that keeps it there (inverse depths are per unit of baseline)"
+        raise ValueError(msg)
     direction = np.asarray(direction, dtype=float)
     if direction.shape != (3,) or not np.all(np.isfinite(direction)) or not np.any(direction):
         msg = f"direction must be 3 finite numbers, not all zero, got {direction.tolist()}"
         raise ValueError(msg)
+    largest = float(np.max(np.abs(direction)))
+    if not 1e-100 < largest < 1e100:  # its norm would overflow or vanish (only its direction counts)
+        direction = direction / largest
     direction = direction / np.linalg.norm(direction)
     n = len(views)
     if reference is not None and (isinstance(reference, bool) or not isinstance(reference, (int, np.integer))):

@@ -13,7 +13,7 @@ documented in ``docs/rig-format.md``; in short::
 
     [motion]                      # dynamic stereo (nfdepth dynamic)
     velocity       = [2.0, 0.0, 0.0]   # moving camera rel. to the reference, units / unit time
-    rotation_deg   = [0.0, 0.0, 0.0]   # its angular velocity, degrees / unit time
+    rotation_deg   = [0.0, 0.0, 0.0]   # its angular velocity, degrees / unit time (at most 90 per frame interval)
     frame_interval = 1.0               # time between consecutive images
     # crossings    = [12, 40]          # two synchronised videos: frames at which the cameras coincide
 
@@ -48,7 +48,14 @@ from typing import Any
 import numpy as np
 
 from ._validate import UNIT_SCALE_RANGE
-from .camera import PinholeCamera, RigidMotion
+from .camera import (
+    MAX_ROTATION_PER_FRAME_DEG,
+    PinholeCamera,
+    RigidMotion,
+    _magnitude,
+    _principal_point_expected,
+    _principal_point_reach,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -143,6 +150,33 @@ def _check_scale(key: str, raw: Any, magnitude: float, what: str) -> None:
     lo, hi = UNIT_SCALE_RANGE
     if not lo <= magnitude <= hi:
         raise _fail(key, raw, f"{what} of {lo:g} to {hi:g} (give it in a unit that keeps it there: depths are written as float32)")
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(f"{float(x) + 0.0:g}" for x in p) + ")"
+
+
+def _check_steps(positions, what: str, *, frames=None, error: type[ValueError] = RigError) -> None:
+    """Refuse a camera step between consecutive positions (N, 3) outside :data:`UNIT_SCALE_RANGE`, as a speed.
+
+    A step is measured by its largest component, as ``video.velocity`` is; zero steps (a camera standing
+    still) are left to the callers. ``frames`` are the frame numbers of the rows (default 0, 1, ...).
+    """
+    p = np.asarray(positions, dtype=float)
+    if len(p) < 2:
+        return
+    with np.errstate(over="ignore"):  # a step beyond the float range is inf: refused below
+        steps = np.max(np.abs(np.diff(p, axis=0)), axis=1)
+    lo, hi = UNIT_SCALE_RANGE
+    bad = np.flatnonzero((steps != 0) & ~((steps >= lo) & (steps <= hi)))
+    if bad.size:
+        i = int(bad[0])
+        a, b = (int(frames[i]), int(frames[i + 1])) if frames is not None else (i, i + 1)
+        raise error(
+            f"{what}: the camera moves from {_point(p[i])} at frame {a} to {_point(p[i + 1])} at frame {b}, a step of"
+            f" {float(steps[i]):g}: expected a speed of {lo:g} to {hi:g} per frame, or 0 where it stands still (give the"
+            " positions in a unit that keeps the steps there: depths are written as float32)"
+        )
 
 
 def _check_keys(table: Any, section: str, allowed: tuple[str, ...]) -> dict:
@@ -464,6 +498,11 @@ def _parse_camera(table) -> PinholeCamera:
     height = _integer(t, "camera", "height_px")
     cx = _number(t, "camera", "cx_px", required=False)
     cy = _number(t, "camera", "cy_px", required=False)
+    reach = _principal_point_reach(width, height)
+    for name, value, size in (("cx_px", cx, width), ("cy_px", cy, height)):
+        centre = (size - 1) / 2.0
+        if value is not None and not abs(value - centre) <= reach:
+            raise _fail(f"camera.{name}", t[name], _principal_point_expected(centre, reach))
     return PinholeCamera(focal, width, height, cx, cy)
 
 
@@ -478,6 +517,22 @@ def _parse_motion(table) -> MotionSpec:
     lo, hi = UNIT_SCALE_RANGE
     if not lo <= interval <= hi:
         raise _fail("motion.frame_interval", t["frame_interval"], f"a time step within {lo:g}..{hi:g} (give times in a unit that keeps it there, e.g. frames)")
+    turn = _magnitude(rotation) * interval
+    if turn > MAX_ROTATION_PER_FRAME_DEG:
+        raise _fail(
+            "motion.rotation_deg",
+            t["rotation_deg"],
+            f"an angular velocity of at most {MAX_ROTATION_PER_FRAME_DEG:g} degrees per frame interval, got {turn:.4g} degrees per"
+            f" frame_interval = {_show(interval)} (the moving camera's images are two intervals apart, and a turn of 180 degrees"
+            " between two images cannot be told from a smaller one the other way; this small-motion method needs a few degrees"
+            " per frame at most)",
+        )
+    if _magnitude(np.deg2rad(rotation)) > hi:  # as RigidMotion requires (the speeds' bound, in rad per unit time)
+        raise _fail(
+            "motion.rotation_deg",
+            t["rotation_deg"],
+            f"an angular velocity of at most {hi:g} rad ({np.rad2deg(hi):.4g} degrees) per unit time (give times in a unit that keeps it there, e.g. frames)",
+        )
     crossings = None
     if "crossings" in t:
         try:
@@ -570,7 +625,9 @@ def _parse_video(table, base: Path | None) -> VideoSpec:
         )
         if not ok:
             raise _fail("video.positions", p, "a list of 3 or more [x, y, z] camera positions, one per frame")
-        return VideoSpec(positions=np.asarray(p, dtype=float))
+        positions = np.asarray(p, dtype=float)
+        _check_steps(positions, "video.positions")
+        return VideoSpec(positions=positions)
     path = t["poses"]
     if not isinstance(path, str) or not path:
         raise _fail("video.poses", path, "a path to a CSV file (frame,x,y,z[,rx,ry,rz])")

@@ -256,7 +256,6 @@ from __future__ import annotations
 
 import functools
 import math
-import sys
 import time
 import warnings
 from dataclasses import dataclass
@@ -269,12 +268,12 @@ from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_nonnegative_finite, check_positive_finite, check_positive_or_inf, check_reach, check_scale_px, check_view_index, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_index, float_dtype
 from .depth import Reason
-from .edges import select_edge_points
+from .edges import _no_edge_points_message, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
 
-__all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background"]
+__all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background", "check_depth_scale"]
 
 # The matched stencil's weights as its float32 arithmetic uses them (the compiled pair stencil).
 _STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WIDE)
@@ -439,11 +438,7 @@ class StereoResult:
             Depth in the units of ``baseline``; NaN where the disparity is
             unknown or ``d + offset <= 0``.
         """
-        f = check_positive_finite("focal_px", focal_px)
-        b = check_positive_finite("baseline", baseline)
-        if not (math.isfinite(f * b) and f * b >= sys.float_info.min):
-            msg = f"focal_px * baseline = {f:g} * {b:g} is outside the floating-point range: give the baseline in a unit that keeps the product finite and nonzero"
-            raise ValueError(msg)
+        f, b = check_depth_scale(focal_px, baseline)
         off = float(disparity_offset_px)
         if not np.isfinite(off):
             msg = f"disparity_offset_px must be finite, got {disparity_offset_px!r}"
@@ -452,6 +447,25 @@ class StereoResult:
         with np.errstate(divide="ignore", invalid="ignore"):
             z = f * b / total
         return np.where(np.isfinite(total) & (total > 0), z, np.nan)
+
+
+def check_depth_scale(focal_px, baseline, *, names=("focal_px", "baseline")) -> tuple[float, float]:
+    """``(focal_px, baseline)`` for ``depth = focal_px * baseline / disparity``, checked.
+
+    Each a positive finite number within 1e-30..1e30, as a rig file's
+    lengths and focal lengths (depths are written as float32; beyond that
+    range they overflow or vanish). ``names`` name them in the messages
+    (the CLI's ``--focal-px``, ``--baseline``).
+    """
+    lo, hi = UNIT_SCALE_RANGE
+    out = []
+    for name, value in zip(names, (focal_px, baseline)):
+        x = check_positive_finite(name, value)
+        if not lo <= x <= hi:
+            msg = f"{name} = {x:g} is outside {lo:g}..{hi:g}: give it in a unit that keeps it there (depths are written as float32)"
+            raise ValueError(msg)
+        out.append(x)
+    return out[0], out[1]
 
 
 def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarray]:
@@ -1017,15 +1031,6 @@ def _occluded_side(d, image, rows, cols, step_px, reach=_SIDE_REACH, direction=N
     return step & (near_right != looks_right)
 
 
-def _check_noise_std(noise_std) -> float:
-    """A given image-noise std: finite, >= 0 and at most 1e30 grey levels (beyond any float32 image; its square overflowed)."""
-    noise = check_nonnegative_finite("noise_std", noise_std)
-    if noise > UNIT_SCALE_RANGE[1]:
-        msg = f"noise_std = {noise:g} is beyond any image's intensities: expected at most {UNIT_SCALE_RANGE[1]:g} (in the views' grey levels)"
-        raise ValueError(msg)
-    return noise
-
-
 def _within_reach(own: np.ndarray, reach_px: float) -> np.ndarray:
     """Pixels within ``reach_px`` (Euclidean) of a pixel of ``own``."""
     r = int(np.floor(reach_px))
@@ -1094,7 +1099,7 @@ def _reported_range(candidates, given, unit):
 def _candidates(lo, hi, step_px):
     """Equally spaced disparity candidates ``lo .. hi`` at ``step_px`` (wider steps beyond ``_MAX_CANDIDATES``), and the step."""
     step = float(step_px)
-    if (hi - lo) / step > _MAX_CANDIDATES:
+    if hi - lo > _MAX_CANDIDATES * step:  # (not a division: a step of 1e-300 px would overflow it)
         step = (hi - lo) / _MAX_CANDIDATES
     return np.arange(lo, hi + 0.5 * step, step, dtype=np.float64), step
 
@@ -1518,7 +1523,8 @@ def static_stereo(
         perpendicular to the baseline; ``B ~ 0`` in eq. 4) are
         ``UNDETERMINABLE``.
     iterations_per_level : int
-        Warp-and-update iterations per level.
+        Warp-and-update iterations per level (at most 1000, as every count
+        below: each is a pass over the image).
     edge_iterations : int
         Point-wise refinement iterations of the edge points.
     dense_window_px : float
@@ -1587,6 +1593,8 @@ def static_stereo(
     min_cost_margin, edge_cost_margin : float
         Relative cost margin to the best candidate more than 1 px away below
         which dense pixels / edge points are ``UNCERTAIN`` (0: no test).
+        These, the thresholds and the ridges above are applied to float32
+        maps: finite values up to 1e30 are accepted.
     edge_step_px : float
         Depth step (px per unit position, dense field 2 px either side) above
         which an edge point whose pixel looks like the far side is
@@ -1637,20 +1645,20 @@ def static_stereo(
     t = _check_positions(positions, n, ref)
     sigma_px = check_scale_px("sigma_px", sigma_px)
     if min_gradient is not None:
-        min_gradient = check_nonnegative_finite("min_gradient", min_gradient)
+        min_gradient = check_threshold("min_gradient", min_gradient)
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     min_cos = check_fraction("min_cos", min_cos)
-    iterations_per_level = check_int("iterations_per_level", iterations_per_level, 1)
-    edge_iterations = check_int("edge_iterations", edge_iterations, 0)
+    iterations_per_level = check_iterations("iterations_per_level", iterations_per_level, 1)
+    edge_iterations = check_iterations("edge_iterations", edge_iterations, 0)
     dense_window_px = check_scale_px("dense_window_px", dense_window_px, zero_ok=False)
     select_window_px = check_scale_px("select_window_px", select_window_px, zero_ok=False)
-    max_std_px = check_positive_finite("max_std_px", max_std_px)
+    max_std_px = check_threshold("max_std_px", max_std_px, positive=True)
     if max_std_px < UNIT_SCALE_RANGE[0]:
         msg = f"max_std_px = {max_std_px:g} px is below any measurable standard deviation: expected at least {UNIT_SCALE_RANGE[0]:g} px (default 0.5)"
         raise ValueError(msg)
     dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
-    max_edge_std_px = check_positive_or_inf("max_edge_std_px", max_edge_std_px)
-    max_edge_disagreement_px = check_positive_or_inf("max_edge_disagreement_px", max_edge_disagreement_px)
+    max_edge_std_px = check_threshold("max_edge_std_px", max_edge_std_px, positive=True, inf_ok=True)
+    max_edge_disagreement_px = check_threshold("max_edge_disagreement_px", max_edge_disagreement_px, positive=True, inf_ok=True)
     if median_px not in (0, 1, 3, 5):
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
@@ -1659,7 +1667,7 @@ def static_stereo(
     if aggregation not in ("guided", "gaussian"):
         msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
         raise ValueError(msg)
-    guided_eps = check_positive_finite("guided_eps", guided_eps)
+    guided_eps = check_threshold("guided_eps", guided_eps, positive=True)
     guided_scale = check_positive_finite("guided_scale", guided_scale)
     if guided_scale * dense_window_px > MAX_SCALE_PX:
         msg = (
@@ -1667,10 +1675,10 @@ def static_stereo(
             f"(guided_scale x dense_window_px), beyond any image: expected at most {MAX_SCALE_PX:g} px"
         )
         raise ValueError(msg)
-    propagate_rounds = check_int("propagate_rounds", propagate_rounds, 0)
+    propagate_rounds = check_iterations("propagate_rounds", propagate_rounds, 0)
     propagate_levels = check_int("propagate_levels", propagate_levels, 0)
     propagate_radius = check_int("propagate_radius", propagate_radius, 1)
-    polish_iterations = check_int("polish_iterations", polish_iterations, 0)
+    polish_iterations = check_iterations("polish_iterations", polish_iterations, 0)
     polish_radius = check_int("polish_radius", polish_radius, 1)
     photometric_window_px = check_scale_px("photometric_window_px", photometric_window_px)
     cost_step_px = check_positive_finite("cost_step_px", cost_step_px)
@@ -1678,17 +1686,17 @@ def static_stereo(
     if cost_radius > MAX_SCALE_PX:
         msg = f"cost_radius = {cost_radius} px is beyond any image: expected an aggregation window radius of at most {MAX_SCALE_PX:g} px (default 9)"
         raise ValueError(msg)
-    cost_eps = check_positive_finite("cost_eps", cost_eps)
-    cost_tau_i = check_positive_finite("cost_tau_i", cost_tau_i)
-    cost_tau_g = check_positive_finite("cost_tau_g", cost_tau_g)
+    cost_eps = check_threshold("cost_eps", cost_eps, positive=True)
+    cost_tau_i = check_threshold("cost_tau_i", cost_tau_i, positive=True)
+    cost_tau_g = check_threshold("cost_tau_g", cost_tau_g, positive=True)
     cost_alpha = check_fraction("cost_alpha", cost_alpha)
     cost_sigma_px = check_scale_px("cost_sigma_px", cost_sigma_px)
     if cost_median_px not in (0, 1, 3, 5):
         msg = f"cost_median_px must be 0, 1, 3 or 5, got {cost_median_px!r}"
         raise ValueError(msg)
-    min_cost_margin = check_nonnegative_finite("min_cost_margin", min_cost_margin)
-    edge_cost_margin = check_nonnegative_finite("edge_cost_margin", edge_cost_margin)
-    edge_step_px = check_nonnegative_finite("edge_step_px", edge_step_px)
+    min_cost_margin = check_threshold("min_cost_margin", min_cost_margin)
+    edge_cost_margin = check_threshold("edge_cost_margin", edge_cost_margin)
+    edge_step_px = check_threshold("edge_step_px", edge_step_px)
     search_range = None if disparity_range_px is None else _check_disparity_range(disparity_range_px)
     if search_range is not None and not cost_volume:
         msg = "disparity_range_px needs cost_volume=True (it is the cost volume's search range)"
@@ -1717,7 +1725,7 @@ def static_stereo(
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
     levels = 1 if search_range is not None else levels
-    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else _check_noise_std(noise_std)
+    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_noise_std("noise_std", noise_std)
     p1, p99 = percentiles(views[ref], [1, 99])
     spread = float(p99 - p1)
     noise_floor = max(noise, 1e-3 * spread, 1e-6)
@@ -1760,7 +1768,8 @@ def static_stereo(
             with np.errstate(divide="ignore", invalid="ignore"):
                 red = _blur(m.chi2, dense_window_px) / (_blur(dof, dense_window_px) * s_c**2)
             red = np.where(np.isfinite(red), np.maximum(red, 1.0), 1.0).astype(np.float32)
-            k2 = 1.0 / (4.0 * np.pi * dense_window_px**2)  # sum K^2 / (sum K)^2 for a 2-D Gaussian
+            # sum K^2 / (sum K)^2 for a 2-D Gaussian; at most 1, the value of a one-tap kernel (sigma below 0.28 px)
+            k2 = 1.0 / max(4.0 * np.pi * dense_window_px**2, 1.0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 if aggregation == "guided":
                     delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, guided_radius, guided_eps)
@@ -1854,11 +1863,7 @@ def static_stereo(
     selection = select_edge_points(field, m.ref_nodes, min_gradient=min_gradient, max_corner_ratio=max_corner_ratio, corner_window_px=max(sigma_px, 1.0))
     edge_mask = selection.mask
     if not edge_mask.any():
-        warnings.warn(
-            "no edge points: the images are textureless (no strong zero-crossing edges); no depth can be measured",
-            UserWarning,
-            stacklevel=2,
-        )
+        warnings.warn(f"{_no_edge_points_message(selection)}; no depth can be measured", UserWarning, stacklevel=2)
     h, w = d.shape
     reason = np.full((h, w), Reason.OK, np.uint8)
     info = m.grad_col**2 * m.s_tt  # each pixel's own information (inverse variance times s_c^2)

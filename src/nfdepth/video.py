@@ -75,13 +75,13 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_image, check_int, check_nonnegative_finite, check_positive_finite, check_scale_px
+from ._validate import UNIT_SCALE_RANGE, as_image, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import estimate_noise_std
 from .pipelines import _ORDER_CHECK_MIN_POINTS, EdgeDepth, static_stereo_edges
-from .rig import Rig, RigError, VideoSpec, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
+from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 
 _UNITS_HINT = "give the rig's focal length and camera positions or speed in units that keep depths in that range"
 
@@ -372,14 +372,28 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
         if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.any(v):
             msg = f"velocity must be 3 finite numbers, not all zero (camera translation per frame), got {np.asarray(velocity).tolist()}"
             raise ValueError(msg)
+        lo, hi = UNIT_SCALE_RANGE
+        if not lo <= float(np.max(np.abs(v))) <= hi:
+            msg = (
+                f"velocity = {_vec(v)}: expected a speed of {lo:g} to {hi:g} per frame in its largest component (camera"
+                " translation per frame; give it in a unit that keeps it there: depths are written as float32)"
+            )
+            raise ValueError(msg)
         return VideoSpec(velocity=v)
     p = np.asarray(positions, dtype=float)
     if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
         msg = f"positions must have shape (N, 3) with finite values, got shape {p.shape}"
         raise ValueError(msg)
     _refuse_static(p, "positions", ValueError)
+    _check_steps(p, "positions", error=ValueError)
     return VideoSpec(positions=p)
 
+
+#: A triple whose step (half the distance between the positions one frame before and
+#: after) is at most this many float64 ulps of the positions' largest coordinate does
+#: not move: such a step is rounding noise of equal positions (each position carries
+#: up to half an ulp, their difference up to about one).
+_ROUNDING_ULPS = 4
 
 #: What a camera without motion is told (no baseline, no depth).
 _MOVE_HINT = "expected camera positions that change from frame to frame (depth needs a baseline between frames)"
@@ -404,17 +418,27 @@ def _frame_list(frames: list[int], most: int = 6) -> str:
     return ", ".join(text) + (", ..." if len(runs) > most else "")
 
 
-def _check_spec_moves(spec: VideoSpec, rig: Rig | None) -> None:
-    """Refuse a rig's positions / poses in which the camera never moves."""
+def _spec_name(spec: VideoSpec, rig: Rig | None) -> str:
+    """How messages name the camera motion of ``spec``: the poses file, or the rig key / parameter."""
     if spec.poses is not None:
-        p = spec.poses.positions
-        what = f"poses '{spec.poses.source}'" if spec.poses.source is not None else "poses"
+        return f"poses '{spec.poses.source}'" if spec.poses.source is not None else "poses"
+    key = "velocity" if spec.velocity is not None else "positions"
+    if rig is None:
+        return key
+    return f"rig '{rig.source}': video.{key}" if rig.source else f"video.{key}"
+
+
+def _check_spec_moves(spec: VideoSpec, rig: Rig | None) -> None:
+    """Refuse a rig's positions / poses in which the camera never moves, or moves by steps outside the speed range."""
+    if spec.poses is not None:
+        p, frames = spec.poses.positions, spec.poses.frames
     elif spec.positions is not None:
-        p = spec.positions
-        what = f"rig '{rig.source}': video.positions" if rig is not None and rig.source else "video.positions"
+        p, frames = spec.positions, None
     else:
-        return  # a velocity is checked non-zero where it is read
+        return  # a velocity is checked non-zero and within range where it is read
+    what = _spec_name(spec, rig)
     _refuse_static(p, what, RigError)
+    _check_steps(p, what, frames=frames)
 
 
 def _refuse_static(p, what: str, error) -> None:
@@ -497,8 +521,11 @@ def depth_from_video(
     ------
     RigError, ValueError
         Size mismatch with the rig's camera, no motion given, rotating
-        poses, positions / poses that never change, or (at the end of the
-        frames) no triple in which the camera moves.
+        poses, positions / poses that never change, a velocity or a step
+        between positions outside 1e-30..1e30 per frame (the rig's speed
+        range), or (at the end of the frames) no triple in which the camera
+        moves. A step of at most 4 float64 ulps of the positions' largest
+        coordinate is rounding noise: that triple does not move.
 
     Warns
     -----
@@ -514,12 +541,16 @@ def depth_from_video(
         msg = "depth_from_video needs a camera: pass rig=... or camera=PinholeCamera(...)"
         raise TypeError(msg)
     sigma_px = check_scale_px("sigma_px", sigma_px)
-    process_noise = check_nonnegative_finite("process_noise", process_noise)
-    gate = check_positive_finite("gate", gate)
-    min_std_px = check_positive_finite("min_std_px", min_std_px)
+    process_noise = check_threshold("process_noise", process_noise)
+    gate = check_threshold("gate", gate, positive=True)
+    min_std_px = check_threshold("min_std_px", min_std_px, positive=True)
+    if noise_std is not None:
+        noise_std = check_noise_std("noise_std", noise_std)
     max_age = check_int("max_age", max_age, 0)
     first = check_int("first_frame", first_frame, 0)
 
+    motion_name = _spec_name(spec, rig)
+    lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
     state: _State | None = None
     prev_pos = None
@@ -527,6 +558,8 @@ def depth_from_video(
     moved = False
     held: list[tuple[int, np.ndarray, float]] = []  # static frames before the first one that moves
     static: list[int] = []
+    rounded: list[int] = []  # static frames whose step is not zero but lost to rounding
+    largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
     behind_points = determinable_points = 0
     triples = 0
@@ -551,8 +584,18 @@ def depth_from_video(
         _camera_rotation(spec, k + 1, rot0)
         step_cam = rmat.T @ ((p_next - p_prev) / 2.0)  # world -> camera axes
         baseline = float(np.linalg.norm(step_cam))
-        # no baseline: zero, or rounding noise of equal positions
-        moves = baseline > 1e-9 * max(float(np.linalg.norm(p_prev)), float(np.linalg.norm(p_next)))
+        # no baseline: zero, or a step lost to float64 rounding of the positions (a few ulps of their largest coordinate)
+        coordinate = max(float(np.max(np.abs(p_prev))), float(np.max(np.abs(p_next))))
+        moves = baseline > _ROUNDING_ULPS * float(np.spacing(coordinate))
+        if moves and not lo <= baseline <= hi:
+            raise (ValueError if rig is None else RigError)(
+                f"{motion_name}: the camera's step around frame {k} (half the distance from frame {k - 1} to frame {k + 1}) is"
+                f" {baseline!r}: expected a step of {lo:g} to {hi:g} per frame (give the positions in a unit that keeps it"
+                " there: depths are written as float32)"
+            )
+        if not moves and baseline > 0:
+            rounded.append(k)
+            largest = max(largest, coordinate)
 
         shape = cam.shape
         rho_m = np.full(shape, np.nan)
@@ -617,15 +660,21 @@ def depth_from_video(
             baseline=baseline,
         )
 
+    rounding = (
+        f"; around frame{'s' if len(rounded) > 1 else ''} {_frame_list(rounded)} the positions differ by no more than float64 rounding ({_ROUNDING_ULPS} ulps"
+        f" of coordinates up to {largest:g}): give them relative to a nearby origin"
+        if rounded
+        else ""
+    )
     if triples and not moved:
         raise ValueError(
             f"the camera does not move in any of the {triples} frame triples (frames {_frame_list(static)} have the same position"
-            f" one frame before and after), so no depth can be measured: {_MOVE_HINT}"
+            f" one frame before and after), so no depth can be measured: {_MOVE_HINT}{rounding}"
         )
     if static:
         warnings.warn(
             f"the camera does not move around {len(static)} of {triples} frames ({_frame_list(static)}: the same position one frame"
-            " before and after): they have no measurement of their own and carry the fused depth of the frames before",
+            f" before and after): they have no measurement of their own and carry the fused depth of the frames before{rounding}",
             UserWarning,
             stacklevel=2,
         )
