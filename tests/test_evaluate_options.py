@@ -2,7 +2,6 @@
 
 import math
 import re
-import time
 import types
 
 import cv2
@@ -56,10 +55,9 @@ def test_downsample_far_beyond_the_views_is_refused_at_once(monkeypatch):
     assert info.value.code == 2
     assert len(calls) <= 384 + 2
     calls.clear()
-    start = time.perf_counter()
     with pytest.raises(_CLIError, match=r"^--downsample 1000000000 is too large .* expected an integer from 1 to 20 "):
         _cli_evaluate._check_downsample(10**9, scene, _CLIError, ("sgbm",))
-    assert len(calls) <= 384 + 2 and time.perf_counter() - start < 5
+    assert len(calls) <= 384 + 2
 
 
 @pytest.mark.parametrize("shape", [(288, 384), (375, 450), (20, 30), (12, 3), (1, 1)])
@@ -84,9 +82,8 @@ def test_downsample_names_the_same_largest_factor_as_the_full_scan(shape, method
 @needs_cli
 def test_cli_downsample_of_a_billion_is_one_line_at_once(capsys):
     root = _real_root()
-    start = time.perf_counter()
     code, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(root), "--methods", "sgbm", "--downsample", "1000000000")
-    assert code == 2 and out == "" and time.perf_counter() - start < 10
+    assert code == 2 and out == ""
     assert err == (
         "nfdepth: error: --downsample 1000000000 is too large for tsukuba (384x288 px): expected an integer from 1 to 20 "
         "(sgbm needs views of at least 8x8 px, more than 18 px wide)\n"
@@ -120,13 +117,22 @@ def test_depth_step_mask_is_the_full_squares_for_every_width(shape):
             np.testing.assert_array_equal(depth_step_mask(truth, width_px=width), _mask_with_the_full_square(truth, width_px=width))
 
 
-def test_depth_step_mask_takes_any_width_without_a_huge_kernel():
+def test_depth_step_mask_takes_any_width_without_a_huge_kernel(monkeypatch):
     """width_px = 10**6 + 1 was a 10**12-byte kernel (MemoryError), 100001 took 30 s and 10 GB: a wide square marks every pixel."""
+    kernels = []
+    dilate = cv2.dilate
+
+    def recorded(src, kernel, *args, **kwargs):
+        kernels.append(kernel.shape)
+        return dilate(src, kernel, *args, **kwargs)
+
+    monkeypatch.setattr(cv2, "dilate", recorded)
+    truth = _step_truth()
     for width in (79, 10**5 + 1, 10**6 + 1, 2**53 - 1):
-        start = time.perf_counter()
-        assert depth_step_mask(_step_truth(), width_px=width).all()
+        assert depth_step_mask(truth, width_px=width).all()
         assert not depth_step_mask(np.full((30, 40), 5.0), width_px=width).any()
-        assert time.perf_counter() - start < 1
+    h, w = truth.shape
+    assert kernels and all(kr <= max(2 * h - 1, 2 * 30 - 1) and kc <= max(2 * w - 1, 2 * 40 - 1) for kr, kc in kernels)
     # just below the whole image: the corners of a 1-px step in the last column stay unmarked
     corner = np.zeros((30, 40))
     corner[0, 39] = 10.0
