@@ -283,3 +283,23 @@ def test_check_iterations_stops_at_a_thousand():
         check_iterations("edge_iterations", -1, 0)
     with pytest.raises(TypeError, match=r"float; give an int such as 3"):
         check_iterations("edge_iterations", 3.0, 0)
+
+
+def test_float32_images_refuse_intensities_whose_gradient_products_overflow():
+    """Intensities of 1e17 made static stereo's float32 gradient products overflow (NumPy warnings, a wrong map); float32 work stops at 1e15."""
+    from nfdepth._validate import MAX_FLOAT32_INTENSITY, as_image
+    from nfdepth.fast import normal_flow_edges
+    from nfdepth.stereo import static_stereo
+
+    img = np.random.default_rng(0).random((24, 32)) * MAX_FLOAT32_INTENSITY
+    assert as_image("im", img).dtype == np.float32  # the bound itself is accepted
+    with pytest.raises(ValueError, match=r"^im has intensities up to 2e\+15, beyond 1e\+15: the float32 work squares gradients, .*rescale the intensities"):
+        as_image("im", np.full((4, 4), -2e15))
+    assert as_image("im", np.full((4, 4), 1e30), np.float64).max() == 1e30  # float64 work has room
+    with pytest.raises(ValueError, match=r"^im contains 1 non-finite"):  # NaN and inf are still named as such
+        as_image("im", np.where(np.eye(4, dtype=bool) & (np.arange(4) == 0), np.nan, 1e20))
+    views = [np.random.default_rng(k).random((24, 32)) * 1e17 for k in range(3)]
+    with pytest.raises(ValueError, match=r"views\[0\] has intensities up to .*, beyond 1e\+15"):
+        static_stereo(views, reference=1)
+    with pytest.raises(ValueError, match=r"frames\[0\] has intensities up to"):
+        normal_flow_edges(views, sigma_px=1.0)

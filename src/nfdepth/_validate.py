@@ -304,8 +304,13 @@ def float_dtype(dtype) -> np.dtype:
     return dt
 
 
+#: Largest |intensity| accepted for float32 work: products of gradients overflow
+#: float32 near 1e17 (measured: static stereo warned at 1e17, ran at 3e16).
+MAX_FLOAT32_INTENSITY = 1e15
+
+
 def as_image(name: str, image, dtype=np.float32) -> np.ndarray:
-    """Validate one 2-D grey image: real, finite, at least 2x2; return as ``dtype``."""
+    """Validate one 2-D grey image: real, finite, at least 2x2 (float32: |values| at most 1e15); return as ``dtype``."""
     arr = np.asarray(image)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
         msg = f"{name} must be a numeric 2-D array, got dtype {arr.dtype}"
@@ -323,7 +328,15 @@ def as_image(name: str, image, dtype=np.float32) -> np.ndarray:
         raise ValueError(msg)
     with np.errstate(over="ignore"):  # values beyond float32 become inf: reported below
         out = arr.astype(float_dtype(dtype), copy=False)
-    if not np.all(np.isfinite(out)):
+    # two reductions without a temporary: NaN propagates into both, inf shows in one
+    lo, hi = float(out.min()), float(out.max())
+    if out.dtype == np.float32 and np.isfinite(lo) and np.isfinite(hi) and max(-lo, hi) > MAX_FLOAT32_INTENSITY:
+        msg = (
+            f"{name} has intensities up to {max(-lo, hi):.3g}, beyond {MAX_FLOAT32_INTENSITY:g}: the float32 work squares "
+            "gradients, which overflow beyond about 1e17; rescale the intensities (e.g. to 0-255 or 0-1)"
+        )
+        raise ValueError(msg)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
         bad = int(np.count_nonzero(~np.isfinite(out)))
         if np.issubdtype(arr.dtype, np.floating) and np.all(np.isfinite(arr)):
             msg = (
