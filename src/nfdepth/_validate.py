@@ -141,6 +141,22 @@ def check_scale_px(name: str, value, *, zero_ok: bool = True) -> float:
 UNIT_SCALE_RANGE = (1e-30, 1e30)
 
 
+def check_view_distances(pos, reference: int) -> None:
+    """Refuse positions (increasing, finite) that put a view nearer than 1e-30 or farther than 1e30 units from the reference.
+
+    Disparities are reported per unit of position, in float32: a unit of
+    1e-300 overflows them, one of 1e300 rounds them to 0.
+    """
+    rel = np.abs(pos - pos[reference])
+    lo, hi = UNIT_SCALE_RANGE
+    if rel[rel > 0].min() < lo or rel.max() > hi:
+        msg = (
+            f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
+            f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
+        )
+        raise ValueError(msg)
+
+
 def check_noise_std(name: str, value) -> float:
     """A given image-noise std: finite, >= 0 and at most 1e30 grey levels (beyond any float32 image; its square overflows)."""
     noise = check_nonnegative_finite(name, value)

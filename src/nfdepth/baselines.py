@@ -35,11 +35,11 @@ import cv2
 import numpy as np
 
 from ._validate import (
-    UNIT_SCALE_RANGE,
     check_bool,
     check_int,
     check_positive_finite,
     check_threshold,
+    check_view_distances,
 )
 
 __all__ = [
@@ -97,7 +97,7 @@ def _check_views_reference(views, reference) -> list:
 
 def _check_positions(positions, n: int, reference: int, what: str) -> np.ndarray:
     """``positions`` (default 0, 1, ..., n - 1) as floats: ``n`` finite, strictly increasing numbers, the views
-    1e-30 to 1e30 units from the reference (:data:`UNIT_SCALE_RANGE`); ``what`` ends the message of a wrong
+    1e-30 to 1e30 units from the reference (:func:`check_view_distances`); ``what`` ends the message of a wrong
     count or order ("positions must be ``what``, got ...").
     """
     if positions is None:
@@ -109,15 +109,7 @@ def _check_positions(positions, n: int, reference: int, what: str) -> np.ndarray
     if pos.shape != (n,) or not np.all(np.diff(pos) > 0):
         msg = f"positions must be {what}, got {positions!r}"
         raise ValueError(msg)
-    rel = np.abs(pos - pos[reference])
-    # disparities are per unit of position (float32): a unit of 1e-300 overflows them, one of 1e300 rounds them to 0
-    lo, hi = UNIT_SCALE_RANGE
-    if rel[rel > 0].min() < lo or rel.max() > hi:
-        msg = (
-            f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
-            f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
-        )
-        raise ValueError(msg)
+    check_view_distances(pos, reference)
     return pos
 
 

@@ -268,7 +268,7 @@ from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_index, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_message, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -1416,15 +1416,7 @@ def _check_positions(positions, n, reference):
         if not np.all(np.diff(pos) > 0):
             msg = f"positions must be strictly increasing (views ordered along the baseline), got {pos.tolist()}"
             raise ValueError(msg)
-        rel = np.abs(pos - pos[reference])
-        # outputs are float32 px per unit of position: a unit of 1e-300 overflows them, one of 1e300 rounds them to 0
-        if rel[rel > 0].min() < UNIT_SCALE_RANGE[0] or rel.max() > UNIT_SCALE_RANGE[1]:
-            lo, hi = UNIT_SCALE_RANGE
-            msg = (
-                f"positions must keep the views {lo:g} to {hi:g} units from the reference (disparities are reported per unit of "
-                f"position, in float32), got {pos.tolist()}: rescale them, e.g. to steps between neighbouring views"
-            )
-            raise ValueError(msg)
+        check_view_distances(pos, reference)
     return pos - pos[reference]
 
 
