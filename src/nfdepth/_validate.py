@@ -166,14 +166,22 @@ def check_noise_std(name: str, value) -> float:
     return noise
 
 
-def check_frame_interval(name: str, value) -> float:
-    """A positive finite time step within :data:`UNIT_SCALE_RANGE` (else rescale the unit of time)."""
+def check_within(name: str, value, bounds=UNIT_SCALE_RANGE, *, advice: str, unit: str = "") -> float:
+    """A positive finite number within ``bounds`` (default :data:`UNIT_SCALE_RANGE`).
+
+    Outside them: "``name`` = value``unit`` is outside lo..hi``unit``: ``advice``".
+    """
     x = check_positive_finite(name, value)
-    lo, hi = UNIT_SCALE_RANGE
+    lo, hi = bounds
     if not lo <= x <= hi:
-        msg = f"{name} = {x:g} is outside {lo:g}..{hi:g}: give times in a unit that keeps the frame interval in that range (e.g. frames)"
+        msg = f"{name} = {x:g}{unit} is outside {lo:g}..{hi:g}{unit}: {advice}"
         raise ValueError(msg)
     return x
+
+
+def check_frame_interval(name: str, value) -> float:
+    """A positive finite time step within :data:`UNIT_SCALE_RANGE` (else rescale the unit of time)."""
+    return check_within(name, value, advice="give times in a unit that keeps the frame interval in that range (e.g. frames)")
 
 
 def check_nonzero_finite(name: str, value, *, what: str = "a non-zero finite number") -> float:

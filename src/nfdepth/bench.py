@@ -230,17 +230,17 @@ def _stream_peak_bytes(frames) -> int:
     return int(peak)
 
 
-def check_bench_threads(threads) -> int:
-    """``threads`` for the benchmark: an integer from 1 to this machine's cores.
+def check_bench_threads(threads, *, name: str = "threads") -> int:
+    """``threads`` for the benchmark: an integer from 1 to this machine's cores (``name`` names it in the messages).
 
     OpenCV starts as many workers as ``cv2.setNumThreads`` asks for (10**9 ran
     the machine out of processes), and timings on more threads than cores
     measure the scheduler, not the method.
     """
-    n = check_int("threads", threads, 1)
+    n = check_int(name, threads, 1)
     cores = max(1, os.cpu_count() or 1)
     if n > cores:
-        msg = f"threads = {n} is more than this machine's {cores} cores (timings on more threads than cores measure the scheduler): expected 1 to {cores}"
+        msg = f"{name} = {n} is more than this machine's {cores} cores (timings on more threads than cores measure the scheduler): expected 1 to {cores}"
         raise ValueError(msg)
     return n
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import UNIT_SCALE_RANGE, as_vector3, check_finite, check_positive_finite
+from ._validate import UNIT_SCALE_RANGE, as_vector3, check_finite, check_within
 
 __all__ = [
     "PinholeCamera",
@@ -60,10 +60,17 @@ MAX_ROTATION_PER_FRAME_DEG = 90.0
 
 
 def _magnitude(vec) -> float:
-    """Euclidean norm of a finite vector without overflow (inf where it exceeds the float range)."""
+    """Euclidean norm of a finite vector without overflow or underflow (inf where it exceeds the float range).
+
+    ``np.linalg.norm`` itself for components between 1e-100 and 1e100 (its
+    squares are safe there); beyond, the vector is scaled by its largest
+    component first.
+    """
     vec = np.asarray(vec, dtype=float)
     m = float(np.max(np.abs(vec))) if vec.size else 0.0
-    return 0.0 if m == 0 else m * float(np.linalg.norm(vec / m))
+    if 1e-100 < m < 1e100 or m == 0:
+        return float(np.linalg.norm(vec))
+    return m * float(np.linalg.norm(vec / m))
 
 
 @dataclass(frozen=True)
@@ -97,14 +104,11 @@ class PinholeCamera:
     cy_px: float | None = None
 
     def __post_init__(self) -> None:
-        focal = check_positive_finite("focal_px", self.focal_px)
-        lo, hi = UNIT_SCALE_RANGE
-        if not lo <= focal <= hi:
-            msg = (
-                f"focal_px = {focal:g} is outside {lo:g}..{hi:g}: expected a focal length in pixels in that range"
-                " (beyond it the normalised coordinates and depths overflow or vanish in float arithmetic)"
-            )
-            raise ValueError(msg)
+        check_within(
+            "focal_px",
+            self.focal_px,
+            advice="expected a focal length in pixels in that range (beyond it the normalised coordinates and depths overflow or vanish in float arithmetic)",
+        )
         for name in ("width_px", "height_px"):
             value = getattr(self, name)
             if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:

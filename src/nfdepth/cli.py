@@ -540,9 +540,9 @@ def _cmd_bench(args) -> int:
     if args.json:
         _check_output(args.json, force=True, exts=(".json",), what="--json")
     try:
-        check_bench_threads(args.threads)
+        check_bench_threads(args.threads, name="--threads")
     except ValueError as exc:
-        raise CLIError(f"--{exc}") from None
+        raise CLIError(str(exc)) from None
     return int(bench_main(json_path=args.json, quick=args.quick, threads=args.threads))
 
 

@@ -46,6 +46,7 @@ from ._validate import (
     check_nonnegative_finite,
     check_positive_finite,
     check_threshold,
+    check_within,
 )
 
 __all__ = [
@@ -320,14 +321,14 @@ def photometric_truth_offset(scene, view: int, *, search_px: float = 0.3, min_gr
     if isinstance(view, bool) or not isinstance(view, (int, np.integer)) or not 0 <= view < n or view == ref:
         msg = f"view must be an index into the scene's {n} views other than the reference {ref}, got {view!r}"
         raise ValueError(msg)
-    search_px = check_positive_finite("search_px", search_px)
-    lo, hi = _SEARCH_PX_RANGE
-    if not lo <= search_px <= hi:
-        msg = (
-            f"search_px = {search_px:g} px is outside {lo:g}..{hi:g} px: the offset is searched on a {_SEARCH_STEP_PX:g} px "
-            "grid over [-search_px, search_px] (at least one step wide), and a truth's offset is a fraction of a pixel (default 0.3)"
-        )
-        raise ValueError(msg)
+    search_px = check_within(
+        "search_px",
+        search_px,
+        _SEARCH_PX_RANGE,
+        unit=" px",
+        advice=f"the offset is searched on a {_SEARCH_STEP_PX:g} px grid over [-search_px, search_px] (at least one step wide), "
+        "and a truth's offset is a fraction of a pixel (default 0.3)",
+    )
     check_threshold("min_gradient", min_gradient)  # checked only: compared as given, as before
     check_threshold("max_truth_range_px", max_truth_range_px)
     steps = int(view) - ref

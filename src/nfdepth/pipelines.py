@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import UNIT_SCALE_RANGE, as_frames, check_frame_interval, check_noise_std, check_positive_finite, check_scale_px, float_dtype
-from .camera import PinholeCamera, RigidMotion
+from ._validate import UNIT_SCALE_RANGE, as_frames, check_frame_interval, check_noise_std, check_scale_px, check_within, float_dtype
+from .camera import PinholeCamera, RigidMotion, _magnitude
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
 from .edges import EdgeSelection, _no_edge_points_message, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
@@ -365,19 +365,12 @@ def static_stereo_edges(
     views = as_frames("views", views, min_count=3, dtype=dt)
     _check_min_size("views", views[0].shape)
     _check_camera(camera, views[0].shape)
-    baseline = check_positive_finite("baseline", baseline)
-    lo, hi = UNIT_SCALE_RANGE
-    if not lo <= baseline <= hi:
-        msg = f"baseline = {baseline:g} is outside {lo:g}..{hi:g}: give it in a unit that keeps it there (inverse depths are per unit of baseline)"
-        raise ValueError(msg)
+    baseline = check_within("baseline", baseline, advice="give it in a unit that keeps it there (inverse depths are per unit of baseline)")
     direction = np.asarray(direction, dtype=float)
     if direction.shape != (3,) or not np.all(np.isfinite(direction)) or not np.any(direction):
         msg = f"direction must be 3 finite numbers, not all zero, got {direction.tolist()}"
         raise ValueError(msg)
-    largest = float(np.max(np.abs(direction)))
-    if not 1e-100 < largest < 1e100:  # its norm would overflow or vanish (only its direction counts)
-        direction = direction / largest
-    direction = direction / np.linalg.norm(direction)
+    direction = direction / _magnitude(direction)  # (safe for components of 1e-300 or 1e300: only the direction counts)
     n = len(views)
     if reference is not None and (isinstance(reference, bool) or not isinstance(reference, (int, np.integer))):
         msg = f"reference must be an int view index (1..{n - 2}) or None, got {reference!r}"

@@ -268,7 +268,7 @@ from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_message, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
@@ -457,15 +457,9 @@ def check_depth_scale(focal_px, baseline, *, names=("focal_px", "baseline")) -> 
     range they overflow or vanish). ``names`` name them in the messages
     (the CLI's ``--focal-px``, ``--baseline``).
     """
-    lo, hi = UNIT_SCALE_RANGE
-    out = []
-    for name, value in zip(names, (focal_px, baseline)):
-        x = check_positive_finite(name, value)
-        if not lo <= x <= hi:
-            msg = f"{name} = {x:g} is outside {lo:g}..{hi:g}: give it in a unit that keeps it there (depths are written as float32)"
-            raise ValueError(msg)
-        out.append(x)
-    return out[0], out[1]
+    advice = "give it in a unit that keeps it there (depths are written as float32)"
+    f, b = (check_within(name, value, advice=advice) for name, value in zip(names, (focal_px, baseline)))
+    return f, b
 
 
 def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarray]:
