@@ -316,6 +316,8 @@ def _cmd_video(args) -> int:
     CLIError = _CLIError
     kind, out = _video_output(args, CLIError)
     options = _check_sigma(args, CLIError)
+    if args.levels is not None:
+        options["levels"] = args.levels
     figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
@@ -403,6 +405,11 @@ def register(sub, CLIError) -> None:
     p.add_argument("--figure", metavar="PNG", help="also write figures with a colour bar of the last frame's fused depth (PNG) and std (PNG_std.png)")
     p.add_argument("--unit", default="scene units", help="unit of depth for the colour bar (default: scene units)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 2)")
+    p.add_argument(
+        "--levels",
+        type=int,
+        help="pyramid levels of each triple's coarse-to-fine prior, for motions beyond 1-2 px per frame (default: from the frame size; 1: the paper's single level)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_video)

@@ -36,9 +36,12 @@ Measurement standard deviations are floored at ``min_std_px`` of disparity
 stencil's discretisation error, and noise-free frames would otherwise get
 infinite weight.
 
-The differential method needs the motion per frame to be small: about
-0.2-2 px of disparity (``f |T| / Z``). Subsample the video (or pick frames)
-when the camera moves faster.
+The differential method measures motions of up to about 1-2 px per frame
+(``f |T| / Z``). Faster cameras are handled coarse to fine: every triple
+first gets a dense inverse-depth prior from a Gaussian pyramid, and the
+paper's measurement runs on the triple warped by it
+(:mod:`nfdepth._translating_pyramid`; ``levels``, default from the frame
+size; ``levels=1`` is the paper's single level).
 
 Two synchronised videos (dynamic stereo)
 ----------------------------------------
@@ -75,6 +78,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ._translating_pyramid import edge_depth_coarse_to_fine
 from ._validate import UNIT_SCALE_RANGE, as_image, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
 from .depth import Reason
@@ -82,6 +86,7 @@ from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_
 from .normal_flow import estimate_noise_std
 from .pipelines import _ORDER_CHECK_MIN_POINTS, EdgeDepth, static_stereo_edges
 from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
+from .stereo import auto_levels
 
 _UNITS_HINT = "give the rig's focal length and camera positions or speed in units that keep depths in that range"
 
@@ -394,6 +399,23 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
 #: not move: such a step is rounding noise of equal positions (each position carries
 #: up to half an ulp, their difference up to about one).
 _ROUNDING_ULPS = 4
+_MAX_RESIDUAL_PX = 2.0  # the differential method's range of motion per frame
+_MIN_LEVEL_SIZE_PX = 8  # the coarsest level of a given ``levels`` keeps this many px on its smaller side
+
+
+def _check_levels(levels, shape) -> int:
+    """``levels`` of :func:`depth_from_video`: default :func:`~nfdepth.stereo.auto_levels`, else 1 .. as many as halve the frame to 8 px."""
+    most = auto_levels(shape, min_size_px=_MIN_LEVEL_SIZE_PX)
+    if levels is None:
+        return auto_levels(shape)
+    levels = check_int("levels", levels, 1)
+    if levels > most:
+        msg = (
+            f"levels = {levels} halves a {shape[1]}x{shape[0]} frame below {_MIN_LEVEL_SIZE_PX} px: expected 1 to {most}"
+            " (default: down to 24 px)"
+        )
+        raise ValueError(msg)
+    return levels
 
 #: What a camera without motion is told (no baseline, no depth).
 _MOVE_HINT = "expected camera positions that change from frame to frame (depth needs a baseline between frames)"
@@ -473,6 +495,8 @@ def depth_from_video(
     min_cos: float = 0.25,
     noise_std: float | None = None,
     stencil: str = "matched",
+    levels: int | None = None,
+    max_residual_px: float = 1.0,
 ) -> Iterator[VideoDepthFrame]:
     """Depth per frame of a camera translating through a static scene, fused over time.
 
@@ -505,6 +529,18 @@ def depth_from_video(
         Floor of a measurement's std, in px of disparity.
     min_cos, noise_std, stencil
         As in :func:`nfdepth.pipelines.static_stereo_edges`.
+    levels : int, optional
+        Pyramid levels of the coarse-to-fine prior of every triple
+        (:mod:`nfdepth._translating_pyramid`), for image motions beyond the
+        differential method's 1-2 px per frame. Default: halve the frame
+        until its smaller side would drop below 24 px
+        (:func:`nfdepth.stereo.auto_levels`). ``1`` is the paper's
+        single-level measurement, with no prior and no warping.
+    max_residual_px : float
+        With ``levels > 1``: edge points whose motion left after warping by
+        the prior exceeds this (px per frame of normal flow) are
+        ``UNCERTAIN`` (the prior failed there, e.g. at an occlusion
+        boundary). At most 2 px, the differential method's range.
 
     Yields
     ------
@@ -548,6 +584,14 @@ def depth_from_video(
         noise_std = check_noise_std("noise_std", noise_std)
     max_age = check_int("max_age", max_age, 0)
     first = check_int("first_frame", first_frame, 0)
+    levels = _check_levels(levels, cam.shape)
+    max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
+    if max_residual_px > _MAX_RESIDUAL_PX:
+        msg = (
+            f"max_residual_px = {max_residual_px:g} px is beyond the differential method's range: expected at most"
+            f" {_MAX_RESIDUAL_PX:g} px of motion per frame left after warping (default 1)"
+        )
+        raise ValueError(msg)
 
     motion_name = _spec_name(spec, rig)
     lo, hi = UNIT_SCALE_RANGE
@@ -603,16 +647,19 @@ def depth_from_video(
         if moves:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
-                res = static_stereo_edges(
-                    window,
-                    camera=cam,
-                    baseline=baseline,
-                    direction=step_cam,
-                    sigma_px=sigma_px,
-                    stencil=stencil,
-                    min_cos=min_cos,
-                    noise_std=noise_std,
-                )
+                edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std}
+                if levels == 1:
+                    res = static_stereo_edges(window, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
+                else:
+                    res = edge_depth_coarse_to_fine(
+                        window,
+                        camera=cam,
+                        baseline=baseline,
+                        direction=step_cam / baseline,
+                        levels=levels,
+                        max_residual_px=max_residual_px,
+                        **edge_options,
+                    )
             behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
             ahead = int(np.count_nonzero(res.inverse_depth.reason == Reason.OK))
             if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:

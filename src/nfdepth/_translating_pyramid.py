@@ -1,0 +1,172 @@
+"""Coarse to fine for a camera translating through a static scene (the video pipeline).
+
+The paper's differential method sees image motions of up to about 1-2 px
+per frame: beyond that the three-frame temporal derivative aliases and the
+edge points' depths come out wrong by tens of percent, with no sign of it in
+their uncertainty. For a triple of frames ``(k-1, k, k+1)`` of a camera
+translating by ``T`` per frame (relative motion ``V = -T``, no rotation),
+paper eq. 1 gives every point the image motion ``rho a(x)`` per frame, with
+``rho = 1/Z`` and the known direction field
+
+.. math::
+    a(x) = f (V_X - x V_Z,\\; V_Y - y V_Z)
+
+(px per frame per unit inverse depth), computed as ``a / (f |V|)`` so that
+no unit or focal length can overflow float32. So:
+
+1. :func:`dense_prior`: a dense inverse depth, coarse to fine. Gaussian
+   pyramids (``cv2.pyrDown``) of the three frames; at each level, from zero
+   at the coarsest, the outer frames are warped toward the middle one with
+   the current estimate (``cv2.remap``), and the residual inverse depth is
+   the weighted least-squares solution of the warped triple's brightness
+   constancy ``I_t + rho' (grad I . a) = 0`` over a Gaussian window (a
+   step of at most 1 px of motion, then a 5 x 5 median), three times per
+   level; the estimate is then upsampled (inverse depth does not scale
+   with the image).
+2. :func:`warp_outer_frames`: the outer frames at full resolution, warped
+   by the prior, so that the triple's remaining motion is the prior's error
+   (sub-pixel where the prior holds).
+3. :func:`edge_depth_coarse_to_fine`: the paper's measurement
+   (:func:`nfdepth.pipelines.static_stereo_edges`, eq. 4) on the warped
+   triple gives the residual relative normal flow at the edge points; the
+   prior's own normal flow ``B rho_prior`` is added back before eq. 4 is
+   solved, so reason codes and uncertainties are those of the total. Points
+   whose residual motion exceeds ``max_residual_px`` (the prior failed
+   there, e.g. at occlusion boundaries) are ``UNCERTAIN``; points whose warp
+   reads outside an outer frame are ``NO_DATA``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import cv2
+import numpy as np
+
+from .camera import PinholeCamera, RigidMotion, _magnitude
+from .depth import Reason, solve_inverse_depth
+from .normal_flow import gaussian_smooth
+
+_ITERATIONS = 3  # warp-and-update passes per pyramid level
+_SIGMA_PX = 1.0  # smoothing at every level before the dense update
+_WINDOW_PX = 4.0  # std of the dense update's Gaussian window (px of that level)
+_RIDGE = 1e-3  # of the median window information: textureless windows keep their estimate
+
+
+def flow_directions(camera: PinholeCamera, translation, shape, *, scale: float = 1.0):
+    """``a(x) / (f |V|)`` at the pixel centres of an image ``shape`` whose pixel ``(i, j)`` is full-resolution ``(scale i, scale j)``.
+
+    ``translation`` is the relative motion ``V`` per frame (``-T`` for a
+    camera moving by ``T``). Returns ``(a_col, a_row)``, float32, in px of
+    that image per px of the full-resolution image: dividing by ``f |V|``
+    keeps them near 1 whatever the units (the inverse depths of this module
+    are ``rho f |V|``, the motion per frame in full-resolution px at the
+    principal point of a lateral step).
+    """
+    h, w = shape
+    x = (np.arange(w, dtype=np.float64) * scale - camera.cx_px) / camera.focal_px
+    y = (np.arange(h, dtype=np.float64) * scale - camera.cy_px) / camera.focal_px
+    vx, vy, vz = np.asarray(translation, dtype=float) / _magnitude(translation)
+    a_col = np.broadcast_to((vx - x * vz) / scale, (h, w)).astype(np.float32)
+    a_row = np.broadcast_to(((vy - y * vz) / scale)[:, None], (h, w)).astype(np.float32)
+    return a_col, a_row
+
+
+def warp_outer_frames(frames, rho, a_col, a_row):
+    """Frames ``k-1`` and ``k+1`` resampled at ``x -/+ rho a(x)`` (linear, border replicated), and where both reads lie inside.
+
+    Returns ``(before, after, inside)``.
+    """
+    h, w = rho.shape
+    cols = np.arange(w, dtype=np.float32)[None, :]
+    rows = np.arange(h, dtype=np.float32)[:, None]
+    du, dv = rho * a_col, rho * a_row
+    out, inside = [], np.ones((h, w), bool)
+    for frame, sign in ((frames[0], -1.0), (frames[2], 1.0)):
+        map_c = (cols + np.float32(sign) * du).astype(np.float32)
+        map_r = (rows + np.float32(sign) * dv).astype(np.float32)
+        out.append(cv2.remap(frame, map_c, map_r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
+        inside &= (map_c >= 0) & (map_c <= w - 1) & (map_r >= 0) & (map_r <= h - 1)
+    return out[0], out[1], inside
+
+
+def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int) -> np.ndarray:
+    """Dense ``rho f |V|`` of the middle frame, coarse to fine (step 1 of the module docstring); float32 (H, W)."""
+    pyramid = [[np.asarray(f, dtype=np.float32) for f in frames]]
+    for _ in range(levels - 1):
+        pyramid.append([cv2.pyrDown(f) for f in pyramid[-1]])
+    rho = None
+    for level in range(levels - 1, -1, -1):
+        smoothed = [gaussian_smooth(f, sigma_px=_SIGMA_PX) for f in pyramid[level]]
+        h, w = smoothed[1].shape
+        a_col, a_row = flow_directions(camera, translation, (h, w), scale=2.0**level)
+        # a step moves a point by at most 1 px of this level
+        limit = (1.0 / np.maximum(np.hypot(a_col, a_row), np.float32(1e-12))).astype(np.float32)
+        rho = np.zeros((h, w), np.float32) if rho is None else cv2.resize(rho, (w, h), interpolation=cv2.INTER_LINEAR)
+        g_col = cv2.Sobel(smoothed[1], cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)
+        g_row = cv2.Sobel(smoothed[1], cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)
+        g = g_col * a_col + g_row * a_row  # brightness change per unit inverse depth
+        den = gaussian_smooth(g * g, sigma_px=_WINDOW_PX)
+        positive = den[den > 0]
+        ridge = np.float32(_RIDGE * float(np.median(positive))) if positive.size else np.float32(1.0)
+        for _ in range(_ITERATIONS):
+            before, after, _inside = warp_outer_frames(smoothed, rho, a_col, a_row)
+            num = gaussian_smooth(g * (np.float32(0.5) * (after - before)), sigma_px=_WINDOW_PX)
+            step = np.clip(-num / (den + ridge), -limit, limit)
+            rho = cv2.medianBlur((rho + step).astype(np.float32), 5)
+    return rho
+
+
+def _at_points(image: np.ndarray, rows, cols) -> np.ndarray:
+    """Bilinear samples of ``image`` (pixel centres at integers) at ``(rows, cols)``."""
+    c = np.asarray(cols, np.float32)[None, :]
+    r = np.asarray(rows, np.float32)[None, :]
+    return cv2.remap(image, c, r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[0].astype(np.float64)
+
+
+def edge_depth_coarse_to_fine(window, *, camera: PinholeCamera, baseline: float, direction, levels: int, max_residual_px: float = 1.0, **edge_options):
+    """Paper eq. 4 at the edge points of the middle frame, on the triple warped by :func:`dense_prior` (module docstring).
+
+    ``window`` holds three float32 frames; ``baseline`` and ``direction``
+    (unit, camera axes) are the camera's step per frame, as for
+    :func:`nfdepth.pipelines.static_stereo_edges`, which gets
+    ``edge_options``. Returns its :class:`~nfdepth.pipelines.EdgeDepth`
+    with ``delta_vn`` and ``inverse_depth`` of the total motion and
+    ``flows["residual"]``, the warped triple's normal flow.
+    """
+    from .pipelines import static_stereo_edges  # pipelines imports nothing from here
+
+    direction = np.asarray(direction, dtype=float)
+    translation = -baseline * direction
+    prior = dense_prior(window, camera, translation, levels=levels)  # rho f |V|
+    a_col, a_row = flow_directions(camera, translation, prior.shape)
+    before, after, inside = warp_outer_frames(window, prior, a_col, a_row)
+    with warnings.catch_warnings():
+        # the residual's sign is the prior's error: negative values are no mistake
+        warnings.filterwarnings("ignore", message=r".* determinable edge points have a negative inverse depth", category=UserWarning)
+        res = static_stereo_edges([before, window[1], after], camera=camera, baseline=baseline, direction=direction, **edge_options)
+    relative_motion = RigidMotion(translation=translation)
+    # B rho_prior, with rho_prior = prior / (f |V|) (B is f |V| times a unit vector's normal component)
+    b_unit = res.inverse_depth.b / (camera.focal_px * _magnitude(translation))
+    total = res.delta_vn + b_unit * _at_points(prior, res.rows, res.cols)
+    inv = solve_inverse_depth(
+        total,
+        camera=camera,
+        rows=res.rows,
+        cols=res.cols,
+        alpha=res.alpha,
+        relative_motion=relative_motion,
+        delta_vn_std=res.delta_vn_std,
+        min_cos=edge_options.get("min_cos", 0.25),
+    )
+    ok = inv.reason == Reason.OK
+    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, prior.shape[0] - 1)
+    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, prior.shape[1] - 1)
+    outside = ~inside[ii, jj]
+    inv.reason[ok & outside] = Reason.NO_DATA
+    inv.reason[(inv.reason == Reason.OK) & ~(np.abs(res.delta_vn) <= max_residual_px)] = Reason.UNCERTAIN
+    bad = inv.reason != Reason.OK
+    inv.rho[bad] = np.nan
+    inv.rho_std[bad] = np.nan
+    return dataclasses.replace(res, delta_vn=total, inverse_depth=inv, flows={"residual": res.flows["relative"]})
