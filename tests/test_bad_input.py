@@ -865,3 +865,178 @@ def test_interrupted_stereo_leaves_no_file(tmp_path, mode, sig, code):
     assert list(out.parent.iterdir()) == []  # no output, no temporary file
     # an output the run had completed is removed too (it said "no partial output" and left it)
     assert ("removed the 1 output(s) it had completed" in stderr) == (mode == "second-write"), stderr
+
+
+# ------------------------------------------- interrupted and failed runs, in process
+
+
+def _stop_at_write(monkeypatch, n: int, exc: BaseException) -> list:
+    """The ``n``-th output file of a run raises ``exc`` half way through its write; the earlier ones complete."""
+    real = io.atomic_write
+    calls: list = []
+
+    def write(path, writer_fn, *, force=False):
+        calls.append(Path(path).name)
+        if len(calls) != n:
+            return real(path, writer_fn, force=force)
+
+        def half(fh):
+            fh.write(b"Pf\n half a file")
+            raise exc
+
+        return real(path, half, force=force)
+
+    monkeypatch.setattr(io, "atomic_write", write)
+    return calls
+
+
+@pytest.mark.parametrize(
+    ("exc", "code", "said"),
+    [(KeyboardInterrupt(), 130, "interrupted"), (None, 143, "terminated (SIGTERM)")],
+)
+def test_interrupt_removes_the_outputs_the_run_completed(tmp_path, views_on_disk, capfd, monkeypatch, exc, code, said):
+    from nfdepth import cli
+
+    exc = exc if exc is not None else cli._Terminated()
+    out = tmp_path / "out"
+    out.mkdir()
+    calls = _stop_at_write(monkeypatch, 3, exc)
+    got, stdout, err = run_cli(
+        capfd, "stereo", *views_on_disk, "--out", out / "d.pfm", "--uncertainty", out / "s.pfm", "--preview", out / "p.png"
+    )
+    assert calls == ["d.pfm", "s.pfm", "p.png"]
+    assert got == code and stdout == ""
+    assert err == f"nfdepth: {said}; no partial output written; removed the 2 output(s) it had completed\n"
+    assert list(out.iterdir()) == []  # neither the completed outputs nor a temporary file
+    assert io.COMPLETED_WRITES is None  # recorded during a command-line run only
+
+
+def test_interrupt_names_the_outputs_it_replaced_with_force(tmp_path, views_on_disk, capfd, monkeypatch):
+    """A file replaced with --force cannot be restored: it stays (new content) and is named; a new one is removed."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "d.pfm").write_bytes(b"old")
+    _stop_at_write(monkeypatch, 3, KeyboardInterrupt())
+    got, _, err = run_cli(
+        capfd, "stereo", *views_on_disk, "--out", out / "d.pfm", "--uncertainty", out / "s.pfm", "--preview", out / "p.png", "--force"
+    )
+    assert got == 130
+    assert err == (
+        f"nfdepth: interrupted; no partial output written; removed the 1 output(s) it had completed;"
+        f" already written before the interruption: {out / 'd.pfm'}\n"
+    )
+    assert [p.name for p in out.iterdir()] == ["d.pfm"]
+    assert io.read_pfm(out / "d.pfm").shape == (48, 64)  # the new, complete map
+    # interrupted at the first write: nothing completed, nothing to say about it
+    _stop_at_write(monkeypatch, 1, KeyboardInterrupt())
+    got, _, err = run_cli(capfd, "stereo", *views_on_disk, "--out", out / "e.pfm")
+    assert got == 130 and err == "nfdepth: interrupted; no partial output written\n"
+    assert [p.name for p in out.iterdir()] == ["d.pfm"]
+
+
+def test_disk_full_is_one_line_exit_4(tmp_path, views_on_disk, capfd, monkeypatch):
+    import errno
+
+    out = tmp_path / "out"
+    out.mkdir()
+    _stop_at_write(monkeypatch, 2, OSError(errno.ENOSPC, "No space left on device"))
+    got, stdout, err = run_cli(capfd, "stereo", *views_on_disk, "--out", out / "d.pfm", "--uncertainty", out / "s.pfm")
+    assert got == 4 and stdout == ""
+    assert err == f"nfdepth: error: cannot write '{out / 's.pfm'}': No space left on device; removed the 1 output(s) it had completed\n"
+    assert not (out / "s.pfm").exists() and not list(out.glob(".*"))  # no half-written file, no temporary file
+
+
+def test_a_failed_write_leaves_none_of_the_runs_outputs(tmp_path, views_on_disk, capfd, monkeypatch):
+    import errno
+
+    out = tmp_path / "out"
+    out.mkdir()
+    _stop_at_write(monkeypatch, 2, OSError(errno.ENOSPC, "No space left on device"))
+    got, _, _ = run_cli(capfd, "stereo", *views_on_disk, "--out", out / "d.pfm", "--uncertainty", out / "s.pfm")
+    assert got == 4
+    assert list(out.iterdir()) == []  # was: d.pfm, complete, next to the missing s.pfm
+
+
+@pytest.mark.parametrize(
+    ("exc", "code", "line"),
+    [
+        (RuntimeError("boom\n  second line"), 1, "internal error (RuntimeError): boom second line; rerun with --debug and report it"),
+        (RuntimeError(), 1, "internal error (RuntimeError): RuntimeError; rerun with --debug and report it"),
+        (ZeroDivisionError("division by zero"), 1, "internal error (ZeroDivisionError): division by zero; rerun with --debug and report it"),
+        (TypeError("bad type"), 2, "bad type"),
+        (FileNotFoundError("cannot read rig file 'r.toml': no such file"), 3, "cannot read rig file 'r.toml': no such file"),
+        (ImageReadError("cannot read image 'a.png': the file is empty"), 3, "cannot read image 'a.png': the file is empty"),
+        (OutputExistsError("'d.pfm' exists; pass force=True"), 4, "'d.pfm' exists; pass force=True"),
+        (OutputWriteError("cannot write 'd.pfm': Read-only file system"), 4, "cannot write 'd.pfm': Read-only file system"),
+        (OSError(28, "No space left on device"), 4, "[Errno 28] No space left on device"),
+    ],
+)
+def test_cli_error_boundary_exit_codes(capfd, monkeypatch, exc, code, line):
+    """What reaches the command line's single error boundary: the exit code by kind, one line, no traceback."""
+    from nfdepth import cli
+
+    def fail(args):
+        raise exc
+
+    monkeypatch.setattr(cli, "_cmd_view", fail)
+    got, stdout, err = run_cli(capfd, "view", "x.npy")
+    assert (got, stdout, err) == (code, "", f"nfdepth: error: {line}\n")
+
+
+def test_cli_data_not_found_is_exit_5(capfd, monkeypatch):
+    from nfdepth import cli
+    from nfdepth.datasets import DataNotFoundError
+
+    def fail(args):
+        raise DataNotFoundError("data folder not found; tried NFDEPTH_DATA (not set)")
+
+    monkeypatch.setattr(cli, "_cmd_view", fail)
+    got, _, err = run_cli(capfd, "view", "x.npy")
+    assert got == 5 and err == "nfdepth: error: data folder not found; tried NFDEPTH_DATA (not set)\n"
+
+
+def test_cli_debug_shows_the_traceback_of_an_argument_error(tmp_path, capfd):
+    """--debug with a refused argument: the traceback, then the plain run's line and exit code."""
+    code = main(["--debug", "reproduce", "--seed", "-1"])
+    err = capfd.readouterr().err
+    assert code == 2
+    assert err.startswith("Traceback") and "CLIError: --seed must be an integer >= 0" in err
+    assert err.strip().splitlines()[-1] == "nfdepth: error: --seed must be an integer >= 0 (the noise generator's seed), got -1"
+    assert main(["reproduce", "--seed", "-1"]) == 2
+    assert "Traceback" not in capfd.readouterr().err
+
+
+def test_cli_runs_outside_the_main_thread(capfd):
+    """main() from a worker thread: no SIGTERM handler (Python allows one in the main thread only), same result."""
+    import threading
+
+    before = signal.getsignal(signal.SIGTERM)
+    got = []
+    worker = threading.Thread(target=lambda: got.append(main(["reproduce", "--noise", "-1"])))
+    worker.start()
+    worker.join()
+    assert got == [2]
+    assert capfd.readouterr().err == "nfdepth: error: --noise must be a finite number >= 0, got -1.0\n"
+    assert signal.getsignal(signal.SIGTERM) is before
+    main(["reproduce", "--noise", "-1"])  # from the main thread: the handler is installed for the run and restored
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_an_unreadable_rig_file_is_an_input_error(tmp_path, views_on_disk, capfd, monkeypatch):
+    """Exit 3 is "an input file could not be read"; an image without read permission gets it, so should a rig file."""
+    import errno
+
+    rig = tmp_path / "r.toml"
+    rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 64\nheight_px = 48\n")
+    real = Path.read_text
+
+    def refused(self, *args, **kwargs):  # what the OS says to a user without read permission (root ignores file modes)
+        if self == rig:
+            raise PermissionError(errno.EACCES, "Permission denied", str(self))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "read_text", refused)
+    got, _, err = run_cli(capfd, "stereo", *views_on_disk, "--rig", rig, "--out", tmp_path / "d.pfm")
+    assert err.count("\n") == 1 and "Traceback" not in err and not (tmp_path / "d.pfm").exists()
+    assert got == 3, err  # was 4: "an output could not be written"
+    assert err.startswith(f"nfdepth: error: cannot read rig file '{rig}'"), err

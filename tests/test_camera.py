@@ -151,3 +151,39 @@ def test_rotation_beyond_the_float_range():
     with pytest.raises(ValueError, match=r"rotation = \[1e\+308, -1e\+308, 1e\+308\]"):  # its norm overflows: no warning
         RigidMotion(rotation=(1e308, -1e308, 1e308))
     assert RigidMotion(rotation=(0.0, 0.0, 1e30)).rotation[2] == 1e30
+
+
+def test_project_refuses_points_that_are_not_3d(camera):
+    with pytest.raises(ValueError, match=r"^points must have shape \(\.\.\., 3\), got \(4, 2\)$"):
+        camera.project(np.zeros((4, 2)))
+
+
+def test_motion_sum_and_scaling_are_those_of_eq1():
+    """Eq. 1 is linear in (V, Omega): the flow of a sum is the sum of the flows, of a scaled motion the scaled flow."""
+    m1 = RigidMotion(translation=(1.0, -2.0, 0.5), rotation=(0.01, 0.0, -0.02))
+    m2 = RigidMotion(translation=(0.25, 4.0, -1.5), rotation=(-0.03, 0.005, 0.01))
+    s = m1 + m2
+    np.testing.assert_array_equal(s.translation, [1.25, 2.0, -1.0])
+    np.testing.assert_array_equal(s.rotation, np.array([0.01, 0.0, -0.02]) + np.array([-0.03, 0.005, 0.01]))
+    k = m1.scaled(2.5)
+    np.testing.assert_array_equal(k.translation, [2.5, -5.0, 1.25])
+    np.testing.assert_array_equal(k.rotation, [0.025, 0.0, -0.05])
+    x, y, rho = np.array([0.1, -0.3]), np.array([0.2, 0.05]), np.array([1 / 300.0, 1 / 250.0])
+    u1, v1 = image_flow(x, y, rho, m1)
+    u2, v2 = image_flow(x, y, rho, m2)
+    us, vs = image_flow(x, y, rho, s)
+    np.testing.assert_allclose([us, vs], [u1 + u2, v1 + v2], rtol=1e-14, atol=1e-18)
+    uk, vk = image_flow(x, y, rho, k)
+    np.testing.assert_allclose([uk, vk], [2.5 * u1, 2.5 * v1], rtol=1e-14, atol=1e-18)
+    # the difference is the sum with the negation (paper eq. 2: relative motion)
+    d = m1 - m2
+    np.testing.assert_array_equal((m1 + (-m2)).translation, d.translation)
+    np.testing.assert_array_equal((m1 + (-m2)).rotation, d.rotation)
+
+
+def test_scaled_motion_is_checked_like_a_new_one():
+    m = RigidMotion(translation=(1.0, 0.0, 0.0), rotation=(0.0, 0.0, 0.01))
+    with pytest.raises(ValueError, match=r"^rotation = \[0, 0, 1e\+38\] rad per unit time: expected an angular velocity of at most 1e\+30"):
+        m.scaled(1e40)
+    with pytest.raises(ValueError, match=r"^translation must be finite, got \[nan, nan, nan\]$"):
+        m.scaled(float("nan"))

@@ -97,3 +97,130 @@ def test_no_command_prints_help(capsys):
     code, out, err = run_cli(capsys)
     assert code == 2
     assert "COMMAND" in out
+
+
+# ------------------------------------------------------------ reproduce options
+
+
+def _without_runtime(summary):
+    return {k: v for k, v in summary.items() if k != "runtime_s"}
+
+
+def test_reproduce_compares_with_the_literal_stencil_by_default(tmp_path, capsys):
+    """A stencil other than the paper's adds the paper's literal stencil as a column and a JSON entry."""
+    js = tmp_path / "r.json"
+    code, out, err = run_cli(capsys, "reproduce", "--only", "exp1", "static", "--json", str(js))
+    assert code == 0, err
+    data = json.loads(js.read_text())
+    lines = out.splitlines()
+    assert lines[1].endswith("| literal-stencil max median")
+    for name in ("exp1", "static"):
+        entry = data[name]
+        assert entry["stencil"] == "matched"
+        literal = run_paper_experiment(name, stencil="paper").summary()
+        assert _without_runtime(entry["literal_stencil"]) == _without_runtime(literal)
+        assert _without_runtime(entry)["flow_rel_error"] == run_paper_experiment(name).summary()["flow_rel_error"]
+        row = next(line for line in lines if line.startswith(name))
+        lf = literal["flow_rel_error"]
+        assert row.endswith(f"| {lf['max']:>19.4f} {lf['median']:6.4f}"), row
+    # the literal stencil is measurably worse on experiment 1 (the reason for the comparison)
+    assert data["exp1"]["literal_stencil"]["flow_rel_error"]["max"] > 2 * data["exp1"]["flow_rel_error"]["max"]
+    # --no-compare drops both
+    code, out, err = run_cli(capsys, "reproduce", "--only", "exp1", "--json", str(js), "--no-compare")
+    assert code == 0, err
+    assert "literal" not in out and "literal_stencil" not in json.loads(js.read_text())["exp1"]
+
+
+def test_reproduce_sigma_and_max_rel_std_reach_the_experiments(tmp_path, capsys):
+    js = tmp_path / "r.json"
+    argv = ["--only", "exp2", "--noise", "1", "--sigma-px", "2.5", "--max-rel-std", "0.02", "--no-compare", "--json", str(js)]
+    code, _, err = run_cli(capsys, "reproduce", *argv)
+    assert code == 0, err
+    got = _without_runtime(json.loads(js.read_text())["exp2"])
+    want = _without_runtime(run_paper_experiment("exp2", noise_std=1.0, sigma_px=2.5, max_rel_std=0.02).summary())
+    assert got == {**want, "stencil": "matched"}
+    # and each matters: --max-rel-std 0.02 refuses about half the points, --sigma-px 2.5 keeps more than the default 4 px
+    loose = run_paper_experiment("exp2", noise_std=1.0, sigma_px=2.5).summary()["points"]
+    assert 0 < got["points"] < 0.6 * loose
+    assert loose > run_paper_experiment("exp2", noise_std=1.0).summary()["points"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        (["--sigma-px", "0"], "--sigma-px must be a positive number, got 0.0"),
+        (["--sigma-px", "nan"], "--sigma-px must be a positive number, got nan"),
+        (["--max-rel-std", "-0.5"], "--max-rel-std must be a positive number, got -0.5"),
+        (["--max-rel-std", "inf"], "--max-rel-std must be a positive number, got inf"),
+        (["--noise", "nan"], "--noise must be a finite number >= 0, got nan"),
+    ],
+)
+def test_reproduce_refuses_bad_options_before_any_work(tmp_path, capsys, argv, line):
+    js = tmp_path / "r.json"
+    code, out, err = run_cli(capsys, "reproduce", "--only", "exp1", *argv, "--json", str(js), "--out", str(tmp_path / "figs"))
+    assert (code, out, err) == (2, "", f"nfdepth: error: {line}\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------ bench
+
+
+def test_bench_passes_its_options_through(tmp_path, capsys, monkeypatch):
+    from nfdepth import bench
+
+    calls = []
+    monkeypatch.setattr(bench, "bench_main", lambda **kwargs: calls.append(kwargs) or 0)
+    js = tmp_path / "b.json"
+    code, _, err = run_cli(capsys, "bench", "--quick", "--threads", "1", "--json", str(js))
+    assert code == 0, err
+    assert calls == [{"json_path": str(js), "quick": True, "threads": 1}]
+    code, _, err = run_cli(capsys, "bench")
+    assert code == 0 and calls[-1] == {"json_path": None, "quick": False, "threads": 1}
+    # an unusable --json is refused before the benchmark runs
+    code, _, err = run_cli(capsys, "bench", "--json", str(tmp_path / "nodir" / "b.json"))
+    assert code == 4 and err == f"nfdepth: error: --json '{tmp_path / 'nodir' / 'b.json'}': directory '{tmp_path / 'nodir'}' does not exist\n"
+    assert len(calls) == 2
+
+
+# ------------------------------------------------------------ evaluate: refused before any work
+
+
+@pytest.mark.parametrize(
+    ("argv", "code", "line"),
+    [
+        (["--json", "{tmp}/r.txt"], 2, "--json '{tmp}/r.txt' must end in .json"),
+        (["--json", "{tmp}/adir.json"], 4, "--json '{tmp}/adir.json' is a directory; expected a file path"),
+        (["--json", "{tmp}/nodir/r.json"], 4, "--json '{tmp}/nodir/r.json': directory '{tmp}/nodir' does not exist"),
+        (["--maps", "{tmp}/afile"], 4, "--maps '{tmp}/afile' exists and is not a directory"),
+        (["--downsample", "0"], 2, "--downsample must be a positive integer, got 0"),
+        (["--views", "two"], 2, "--views must be 'three' or 'all', got 'two'"),
+        (["--cost-step-px", "0"], 2, "--cost-step-px must be a positive number, got 0"),
+    ],
+)
+def test_evaluate_refuses_bad_options_before_reading_data(tmp_path, capsys, argv, code, line):
+    (tmp_path / "adir.json").mkdir()
+    (tmp_path / "afile").write_text("x")
+    before = sorted(tmp_path.rglob("*"))
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    # a data folder that does not exist: the options are checked first
+    got, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(tmp_path / "no-data"), *argv)
+    assert (got, out, err) == (code, "", f"nfdepth: error: {line.format(tmp=tmp_path)}\n")
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_evaluate_group_checks_downsample_for_every_scene_first(tmp_path, capsys):
+    """A factor too large for the group's last scene is refused before the first scene's results are printed or written."""
+    from nfdepth.datasets import DataNotFoundError, data_root
+
+    try:
+        data_root()
+    except DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA")
+    js = tmp_path / "r.json"
+    code, out, err = run_cli(capsys, "evaluate", "middlebury2005", "--methods", "sgbm", "--downsample", "36", "--json", str(js))
+    assert (code, out) == (2, "")
+    assert err == (
+        "nfdepth: error: --downsample 36 is too large for middlebury2005/Reindeer (671x555 px): expected an integer from 1 to 35"
+        " (sgbm needs views of at least 8x8 px, more than 18 px wide)\n"
+    )
+    assert not js.exists()

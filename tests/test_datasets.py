@@ -245,3 +245,136 @@ def test_missing_file_is_named(tmp_path, monkeypatch):
         D.load_scene("nope")
     with pytest.raises(ValueError, match="scene must be one of Art, Books"):
         D.load_middlebury2005("Laundry")
+
+
+def test_repr_is_one_line_without_arrays():
+    assert repr(_synthetic_scene()) == (
+        "MultiViewScene(name='syn', views=3 x 8x10, reference_index=1, focal_px=100.0, baseline=10.0 mm, disparity_offset_px=0.0)"
+    )
+
+
+def test_scene_checks_refuse_wrong_types_and_ranges():
+    sc = _synthetic_scene()
+    cases = [
+        (lambda: D.load_scene(5), TypeError, r"^name must be a str such as 'tsukuba', got int$"),
+        (lambda: D.load_scene("middlebury2005/Laundry"), ValueError, r"^name must be one of tsukuba, teddy, middlebury2005/Art, .*, motorcycle, got 'middlebury2005/Laundry'$"),
+        (lambda: D.load_middlebury2005(5), TypeError, r"^scene must be a str, one of Art, Books, Dolls, Moebius, Reindeer; got int$"),
+        (lambda: D.downsample_scene("syn", 2), TypeError, r"^scene must be a MultiViewScene, got str$"),
+        (lambda: D.downsample_scene(sc, "2"), TypeError, r"^factor must be a positive integer, got '2'$"),
+        (lambda: D.downsample_scene(sc, True), TypeError, r"^factor must be a positive integer, got True$"),
+        (lambda: D.downsample_scene(sc, 2, min_valid_fraction=0), ValueError, r"^min_valid_fraction must be in \(0, 1\], got 0$"),
+        (lambda: D.downsample_scene(sc, 2, min_valid_fraction=1.5), ValueError, r"^min_valid_fraction must be in \(0, 1\], got 1.5$"),
+        (lambda: D.view_subset(None, [0, 1]), TypeError, r"^scene must be a MultiViewScene, got NoneType$"),
+        (lambda: D.view_subset(sc, [0.5, 1]), TypeError, r"^indices must be a sequence of integers, got \[0.5, 1\]$"),
+        (lambda: D.view_subset(sc, [True, 2]), TypeError, r"^indices must be a sequence of integers, got \[True, 2\]$"),
+        (lambda: D.view_subset(sc, 1), TypeError, r"^indices must be a sequence of integers, got 1$"),
+        (lambda: D.view_subset(sc, [1]), ValueError, r"^indices must hold at least two views, got \[1\]$"),
+    ]
+    for call, exc, match in cases:
+        with pytest.raises(exc, match=match):
+            call()
+    # whole floats are whole numbers
+    assert D.view_subset(sc, [0.0, 1.0]).reference_index == 1
+    assert D.downsample_scene(sc, 2.0).disparity.shape == (4, 5)
+
+
+def test_data_root_search_order(tmp_path, monkeypatch):
+    """NFDEPTH_DATA unset: ../shared/data of the working directory first, then a shared/data
+    beside a folder above the package, then the fetch-data folder if it holds a set."""
+    monkeypatch.delenv("NFDEPTH_DATA", raising=False)
+    cwd_data = tmp_path / "a" / "shared" / "data"
+    cwd_data.mkdir(parents=True)
+    (tmp_path / "a" / "main").mkdir()
+    beside = tmp_path / "b" / "shared" / "data"
+    beside.mkdir(parents=True)
+    monkeypatch.setattr(D, "__file__", str(tmp_path / "b" / "main" / "src" / "nfdepth" / "datasets.py"))
+    fetched = tmp_path / "cache" / "nfdepth" / "data"
+    (fetched / "tsukuba").mkdir(parents=True)
+    monkeypatch.setattr(D._fetch, "default_data_dir", lambda: fetched)
+    monkeypatch.chdir(tmp_path / "a" / "main")
+    assert D.data_root() == cwd_data.resolve()
+    elsewhere = tmp_path / "d" / "e"
+    elsewhere.mkdir(parents=True)
+    monkeypatch.chdir(elsewhere)  # no ../shared/data here
+    assert D.data_root() == beside.resolve()  # the nearest folder above the package's file
+    monkeypatch.setattr(D, "_repo_candidate", lambda: None)  # (a shared/data above tmp_path would count too)
+    # the fetch-data folder counts once a set's SHA256SUMS is written
+    with pytest.raises(DataNotFoundError, match=rf"the download folder {fetched} \(no data set there\)"):
+        D.data_root()
+    (fetched / "tsukuba" / "SHA256SUMS").write_text("")
+    assert D.data_root() == fetched.resolve()
+
+    def homeless():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(D._fetch, "default_data_dir", homeless)
+    with pytest.raises(DataNotFoundError, match=r"a shared/data folder beside any parent of .*, the download folder \(no home directory\); set NFDEPTH_DATA="):
+        D.data_root()
+
+
+def _write_art(root, *, shape=(12, 16), dmin="200", disp=None):
+    """A Middlebury 2005 'Art' folder of small 8-bit grey PNGs: view k holds 10 k + col, disp1.png 8 x (1 + col % 4)."""
+    folder = root / "middlebury2005" / "Art"
+    folder.mkdir(parents=True, exist_ok=True)
+    h, w = shape
+    cols = np.tile(np.arange(w, dtype=np.uint8), (h, 1))
+    for k in range(7):
+        cv2.imwrite(str(folder / f"view{k}.png"), (10 * k + cols).astype(np.uint8))
+    if disp is None:
+        disp = (8 * (1 + cols % 4)).astype(np.uint8)
+        disp[0, 0] = 0  # unknown
+    cv2.imwrite(str(folder / "disp1.png"), disp)
+    (folder / "dmin.txt").write_text(dmin)
+    return folder
+
+
+def test_middlebury2005_loader_decodes_its_files(tmp_path):
+    """disp1.png holds 8 d (0: unknown), dmin.txt the full-size dmin (offset dmin / 8); grey
+    views come back as their values, the colour reference as the grey view in three channels."""
+    _write_art(tmp_path)
+    sc = D.load_scene("middlebury2005/art", tmp_path)
+    assert sc.name == "middlebury2005/Art" and sc.reference_index == 1 and len(sc.views) == 7
+    cols = np.arange(16)
+    np.testing.assert_array_equal(sc.views[3], np.tile(30.0 + cols, (12, 1)).astype(np.float32))
+    expected = np.tile((1 + cols % 4).astype(np.float32), (12, 1))
+    expected[0, 0] = np.nan
+    np.testing.assert_array_equal(sc.disparity, expected)
+    assert sc.disparity_offset_px == 25.0 and sc.truth_step_px == 1 / 8
+    assert sc.colour_reference.shape == (12, 16, 3) and sc.colour_reference.dtype == np.uint8
+    for c in range(3):
+        np.testing.assert_array_equal(sc.colour_reference[..., c], np.tile(10 + cols, (12, 1)))
+    # a colour disparity file with equal channels is grey
+    grey3 = np.repeat((8 * (1 + np.tile(cols, (12, 1)) % 4)).astype(np.uint8)[..., None], 3, axis=2)
+    _write_art(tmp_path, disp=grey3)
+    np.testing.assert_array_equal(D.load_middlebury2005("Art", tmp_path).disparity, np.tile((1 + cols % 4).astype(np.float32), (12, 1)))
+
+
+def test_damaged_scene_files_are_named(tmp_path):
+    folder = _write_art(tmp_path, dmin="abc")
+    with pytest.raises(DataNotFoundError, match=rf"^'{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
+        D.load_middlebury2005("Art", tmp_path)
+    _write_art(tmp_path, dmin="")
+    with pytest.raises(DataNotFoundError, match=r"should hold one number \(dmin in full-size px\), got ''$"):
+        D.load_middlebury2005("Art", tmp_path)
+    colour = np.zeros((12, 16, 3), np.uint8)
+    colour[..., 2] = 40
+    _write_art(tmp_path, disp=colour)
+    with pytest.raises(D.ImageReadError, match=rf"^cannot read image '{folder / 'disp1.png'}': expected a grey disparity map, got colour$"):
+        D.load_middlebury2005("Art", tmp_path)
+    _write_art(tmp_path, disp=np.full((12, 17), 16, np.uint8))
+    with pytest.raises(DataNotFoundError, match=r"^scene 'middlebury2005/Art': views and disparity differ in shape \[\(12, 16\), \(12, 17\)\]; are the files intact\?$"):
+        D.load_middlebury2005("Art", tmp_path)
+    moto = tmp_path / "skimage-motorcycle"
+    moto.mkdir()
+    for side in ("left", "right"):
+        cv2.imwrite(str(moto / f"motorcycle_{side}.png"), np.zeros((6, 8), np.uint8))
+    (moto / "motorcycle_disp.npz").write_bytes(b"not a zip file")
+    with pytest.raises(DataNotFoundError, match=rf"^cannot read disparity '{moto / 'motorcycle_disp.npz'}': "):
+        D.load_motorcycle(tmp_path)
+    np.savez(moto / "motorcycle_disp.npz", other=np.zeros((6, 8)))
+    with pytest.raises(DataNotFoundError, match=r"^cannot read disparity '.*': 'arr_0 is not a file in the archive'$"):
+        D.load_motorcycle(tmp_path)
+    np.savez(moto / "motorcycle_disp.npz", np.where(np.eye(6, 8) > 0, np.inf, 20.0))
+    mc = D.load_motorcycle(tmp_path)  # +inf (unknown) is NaN
+    np.testing.assert_array_equal(np.isnan(mc.disparity), np.eye(6, 8) > 0)
+    assert np.nanmax(mc.disparity) == 20.0 and mc.colour_reference.shape == (6, 8, 3)

@@ -117,6 +117,8 @@ def test_bad_special_case_input():
         depth_x_translation(0.5, 0.0, focal_px=-1, delta_vx=1.0)
     with pytest.raises(ValueError, match="min_cos must be within"):
         solve_inverse_depth([1.0], camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=RigidMotion((1, 0, 0)), min_cos=2)
+    with pytest.raises(TypeError, match=r"^camera must be a nfdepth.PinholeCamera, got dict$"):
+        depth_z_translation(0.5, 0.0, camera={"focal_px": 120.0}, rows=[1.0], cols=[1.0], delta_vz=1.0)
 
 
 def test_uncertainty_bound_marks_uncertain():
@@ -128,3 +130,37 @@ def test_uncertainty_bound_marks_uncertain():
     assert np.isnan(inv.depth[1])
     with pytest.raises(ValueError, match="max_rel_std needs delta_vn_std"):
         solve_inverse_depth([-0.5], max_rel_std=0.1, camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=rel)
+
+
+def test_static_stereo_edges_fuses_the_triples_up_to_max_span():
+    """Seven noisy views of the paper's pyramid (reference the middle one): ``max_span=1`` is
+    the middle triple alone (the three middle views give the same depths); ``max_span=2``
+    fuses the triples k = 1, 2 by inverse-variance least squares. The k = 2 triple moves twice
+    as far, so its std is about half: the fused std is 1 / sqrt(1 + 4) = 0.45 of the
+    triple's for independent triples (they share the reference; measured 0.48, bound
+    0.4-0.6), and the median relative depth error against the rendered surface about halves
+    (measured 2.0 % -> 1.0 %; 0.43-0.53 of it over four noise draws; bound 0.7 and 1.5 %)."""
+    from nfdepth import synthetic
+    from nfdepth.pipelines import static_stereo_edges
+
+    scene = synthetic.paper_static_sequence(n_views=7, noise_std=2.0, rng=np.random.default_rng(0), image_size_px=120)
+    kw = {"camera": scene.camera, "baseline": 2.0, "noise_std": 2.0}
+    one = static_stereo_edges(scene.frames, max_span=1, **kw)
+    middle = static_stereo_edges(scene.frames[2:5], **kw)
+    np.testing.assert_array_equal(one.depth, middle.depth)
+    np.testing.assert_array_equal(one.rows, middle.rows)
+    two = static_stereo_edges(scene.frames, max_span=2, **kw)
+    np.testing.assert_array_equal(static_stereo_edges(scene.frames[1:6], **kw).depth, two.depth)  # the default: every triple that fits
+
+    def rel_error(r):
+        ok = r.valid
+        assert ok.sum() > 300
+        truth = synthetic.surface_depth_at(scene.polyhedron, scene.camera, r.rows[ok], r.cols[ok])
+        return np.median(np.abs(r.depth[ok] - truth) / truth), np.median(r.inverse_depth.rho_std[ok] / r.inverse_depth.rho[ok])
+
+    (err1, std1), (err2, std2) = rel_error(one), rel_error(two)
+    assert 0.4 <= std2 / std1 <= 0.6, std2 / std1
+    assert err2 < 0.7 * err1 and err2 < 0.015, (err1, err2)
+    for bad in (True, 1.5):
+        with pytest.raises(TypeError, match=rf"^max_span must be an int >= 1 or None, got {bad!r}$"):
+            static_stereo_edges(scene.frames, max_span=bad, **kw)

@@ -1,5 +1,7 @@
 """Zero-crossing edge points and corner rejection (paper section 3.2)."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.special import erf
@@ -167,3 +169,25 @@ def test_the_rounding_floor_keeps_faint_real_edges():
     sel = select_edge_points(g, gaussian_smooth(img, sigma_px=1.0))
     assert sel.mask[:, 19].sum() >= 30
     assert rounding_gradient_floor(gaussian_smooth(img, sigma_px=1.0)) == pytest.approx(2.0001e-4, rel=1e-4)
+
+
+def test_zero_crossings_of_integer_and_bool_images_are_those_of_floats():
+    """A step from 10 to 200 between columns 19 and 20: the Laplacian is +190 / -190 there,
+    so exactly the cells of column 19 cross zero, whatever the image's dtype (OpenCV's
+    Laplacian of a uint8 image would clip the negative half to 0 and find none)."""
+    img = np.tile(np.repeat([10, 200], 20), (10, 1))
+    expected = np.zeros((9, 39), bool)
+    expected[:, 19] = True
+    for dtype in (np.uint8, np.uint16, np.int32, np.int64, np.float32, np.float64):
+        np.testing.assert_array_equal(laplacian_zero_crossings(img.astype(dtype)), expected, err_msg=str(dtype))
+    np.testing.assert_array_equal(laplacian_zero_crossings(img > 100), expected)
+
+
+def test_zero_crossings_and_structure_tensor_refuse_bad_arrays():
+    for bad, what in ((np.zeros(5), "dtype float64, shape (5,)"), (np.zeros((1, 5)), "dtype float64, shape (1, 5)"),
+                      (np.zeros((4, 4), complex), "dtype complex128, shape (4, 4)"), (np.full((4, 4), "a"), "dtype <U1, shape (4, 4)")):
+        with pytest.raises(ValueError, match=rf"^smoothed must be a real 2-D image of at least 2x2 pixels, got {re.escape(what)}$"):
+            laplacian_zero_crossings(bad)
+    for a, b in (((3, 4), (4, 3)), ((0, 4), (0, 4)), ((3,), (3,))):
+        with pytest.raises(ValueError, match=rf"^grad_col and grad_row must be non-empty 2-D arrays of one shape, got {re.escape(str(a))} and {re.escape(str(b))}$"):
+            block_structure_tensor(np.zeros(a), np.zeros(b), window_sigma_px=2.0)

@@ -314,3 +314,82 @@ def test_cli_default_folder_is_found_automatically(shared, capsys, tmp_path, mon
     monkeypatch.setattr(D, "_repo_candidate", lambda: None)
     assert D.data_root() == default.resolve()
     assert D.list_scenes() == ["motorcycle"]
+
+
+# ------------------------------------------------------------------ more refusals and failures
+
+
+def test_argument_types_are_refused_before_anything_is_created(tmp_path):
+    dest = tmp_path / "data"
+    with pytest.raises(TypeError) as info:
+        F.fetch_data(dest, sets=5)
+    assert str(info.value) == f"sets must be a set name or a list of them ({', '.join(F.DATA_SETS)}), got int"
+    with pytest.raises(TypeError) as info:
+        F.fetch_data(dest, sets="tsukuba", mirror=b"http://127.0.0.1/")
+    assert str(info.value) == "mirror must be a URL string such as 'https://data.example.org/nfdepth', got bytes"
+    with pytest.raises(TypeError, match=r"^sets must be a set name or a list of them .*, got int$"):
+        F.data_files(5)
+    assert not dest.exists()
+
+
+def test_a_folder_where_a_file_belongs(tmp_path, capsys):
+    """A folder in the place of a data file is not removed: exit 4 naming it, before any download."""
+    dest = tmp_path / "data"
+    (dest / "tsukuba" / "scene1.row3.col1.ppm").mkdir(parents=True)
+    url = f"http://127.0.0.1:{_closed_port()}"  # never reached
+    with pytest.raises(IsADirectoryError) as info:
+        F.fetch_data(dest, sets="tsukuba", mirror=url)
+    assert str(info.value) == f"cannot write '{dest / 'tsukuba' / 'scene1.row3.col1.ppm'}': it is a folder; remove it and fetch again"
+    code, out, err = run_cli(capsys, "fetch-data", "--set", "tsukuba", "--mirror", url, "--dest", dest)
+    assert (code, out) == (4, "")
+    assert err == f"nfdepth: error: cannot write '{dest / 'tsukuba' / 'scene1.row3.col1.ppm'}': it is a folder; remove it and fetch again\n"
+    assert [p for p in dest.rglob("*") if p.is_file()] == []
+
+
+@pytest.mark.parametrize(
+    ("make", "reason"),
+    [
+        (lambda requests: requests.exceptions.ReadTimeout("HTTPConnectionPool(host='127.0.0.1'): Read timed out. (read timeout=30)"),
+         "the connection timed out"),
+        (lambda requests: requests.exceptions.TooManyRedirects("Exceeded 30 redirects."), "Exceeded 30 redirects."),
+        (lambda requests: requests.exceptions.ChunkedEncodingError(), "ChunkedEncodingError"),
+    ],
+)
+def test_network_failures_are_named(tmp_path, capsys, monkeypatch, make, reason):
+    pooch = pytest.importorskip("pooch")
+    requests = pytest.importorskip("requests")
+
+    def fail(url, **kwargs):
+        raise make(requests)
+
+    monkeypatch.setattr(pooch, "retrieve", fail)
+    dest = tmp_path / "data"
+    url = "http://127.0.0.1:9"
+    code, _out, err = run_cli(capsys, "fetch-data", "--set", "tsukuba", "--mirror", url, "--dest", dest)
+    assert code == 5 and err.count("\n") == 1
+    assert err == (
+        f"nfdepth: error: could not download 'tsukuba/scene1.row3.col1.ppm' from {url}/tsukuba/scene1.row3.col1.ppm: {reason};"
+        " nothing was written for it. Check the network connection (or the mirror URL) and run the fetch again:"
+        " the files already checked are kept\n"
+    )
+    assert [p for p in dest.rglob("*") if p.is_file()] == []
+
+
+def test_cli_fetch_into_the_nfdepth_data_folder_says_so(shared, capsys, tmp_path, monkeypatch):
+    """Every file already there (no download, no pooch needed): the hint says NFDEPTH_DATA already points at it."""
+    import shutil
+
+    dest = tmp_path / "data"
+    (dest / "tsukuba").mkdir(parents=True)
+    for e in F.data_files("tsukuba"):
+        shutil.copyfile(shared / "tsukuba" / e.path, dest / "tsukuba" / e.path)
+    monkeypatch.setenv("NFDEPTH_DATA", str(dest))
+    monkeypatch.setitem(sys.modules, "pooch", None)  # nothing to download: pooch is not needed
+    code, out, err = run_cli(capsys, "fetch-data", "--set", "tsukuba", "--dest", dest)
+    assert code == 0 and err == ""
+    assert out.splitlines() == [
+        f"tsukuba: 6 files (1.8 MB) in {dest / 'tsukuba'}: 0 downloaded, 6 already there",
+        f"data ready in {dest.resolve()} (tsukuba: 6 files checked by SHA-256)",
+        "NFDEPTH_DATA points here: nfdepth evaluate tsukuba",
+    ]
+    assert (dest / "tsukuba" / "SHA256SUMS").read_text() == (shared / "tsukuba" / "SHA256SUMS").read_text()

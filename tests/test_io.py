@@ -491,3 +491,154 @@ def test_to_float32_map_refuses_values_float32_cannot_hold():
         to_float32_map(np.array([1.0, 5e40]), what="a depth", hint="use metres")
     with pytest.raises(ValueError, match=r"a value of 1e-50 does not fit"):
         to_float32_map(np.array([1.0, 1e-50]))
+
+
+# ------------------------------------------------------------------ more read paths
+
+
+def test_pfm_bad_scale_and_directory(tmp_path):
+    p = tmp_path / "s.pfm"
+    p.write_bytes(b"Pf\n2 2\n--1\n" + b"\0" * 16)  # the header's number pattern matches, the number does not parse
+    with pytest.raises(ImageReadError) as info:
+        read_pfm(p)
+    assert str(info.value) == f"cannot read image '{p}': bad PFM scale b'--1'"
+    with pytest.raises(ImageReadError, match=r"^cannot read image '.*': it is a directory, not a file$"):
+        read_pfm(tmp_path)
+
+
+@pytest.mark.parametrize("name", ["m.tif", "m.tiff", "m.npy"])
+def test_missing_tiff_and_npy(tmp_path, name):
+    with pytest.raises(ImageReadError) as info:
+        read_image(tmp_path / name)
+    assert str(info.value) == f"cannot read image '{tmp_path / name}': no such file"
+
+
+def test_unreadable_file_names_the_reason(tmp_path, monkeypatch):
+    """The OS refusing the read (permissions; root ignores them, so simulated) is a read error naming the file."""
+    import errno
+    from pathlib import Path
+
+    p = tmp_path / "v.png"
+    assert cv2.imwrite(str(p), np.zeros((4, 4), np.uint8))
+
+    def refused(self):
+        raise PermissionError(errno.EACCES, "Permission denied", str(self))
+
+    monkeypatch.setattr(Path, "read_bytes", refused)
+    with pytest.raises(ImageReadError) as info:
+        read_image(p)
+    assert str(info.value) == f"cannot read image '{p}': Permission denied"
+
+
+def test_planar_tiff_is_read_as_rgb(tmp_path):
+    """A TIFF stored plane by plane, (3, H, W), comes back as (H, W, 3) in R, G, B order."""
+    rgb = np.random.default_rng(4).integers(0, 256, size=(5, 7, 3), dtype=np.uint8)
+    p = tmp_path / "planar.tif"
+    tifffile.imwrite(p, np.moveaxis(rgb, -1, 0), photometric="rgb", planarconfig="separate")
+    assert tifffile.imread(p).shape == (3, 5, 7)
+    np.testing.assert_array_equal(read_image(p, grey=False, dtype=None), rgb)
+    np.testing.assert_allclose(read_image(p, dtype=np.float64), 0.299 * rgb[..., 0] + 0.587 * rgb[..., 1] + 0.114 * rgb[..., 2], atol=1e-9)
+
+
+def test_npy_contents_checked(tmp_path):
+    np.save(tmp_path / "one.npy", _ramp()[..., None])  # (H, W, 1): a grey map
+    np.testing.assert_array_equal(read_image(tmp_path / "one.npy"), _ramp())
+    assert read_image(tmp_path / "one.npy", grey=False, dtype=None).shape == (5, 7)
+    for name, array, dtype in (("c.npy", np.ones((2, 2), complex), "complex128"), ("s.npy", np.array([["a", "b"]]), "<U1")):
+        np.save(tmp_path / name, array)
+        with pytest.raises(ImageReadError) as info:
+            read_image(tmp_path / name)
+        assert str(info.value) == f"cannot read image '{tmp_path / name}': holds dtype {dtype}, expected real numbers"
+    np.save(tmp_path / "b.npy", np.array([[True, False]]))
+    np.testing.assert_array_equal(read_image(tmp_path / "b.npy"), [[1.0, 0.0]])
+
+
+def test_npy_header_asking_for_too_much_memory(tmp_path):
+    """A broken header claiming 2**47 float64 values (1 PB): a read error, not a MemoryError."""
+    from numpy.lib import format as npy_format
+
+    p = tmp_path / "huge.npy"
+    with open(p, "wb") as fh:
+        npy_format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": (2**47,)})
+        fh.write(b"\0" * 64)
+    with pytest.raises(ImageReadError) as info:
+        read_image(p)
+    assert str(info.value) == f"cannot read image '{p}': its NPY header asks for more memory than is available (broken header?)"
+
+
+# ------------------------------------------------------------------ more atomic-write paths
+
+
+def test_atomic_write_needs_a_callable(tmp_path):
+    with pytest.raises(TypeError, match=r"^writer_fn must be callable, got bytes$"):
+        atomic_write(tmp_path / "x.bin", b"data")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_a_target_that_appears_meanwhile_is_kept(tmp_path):
+    """Another writer creates the target while ours is being written: without force ours is refused, theirs kept."""
+    target = tmp_path / "x.bin"
+
+    def racing(fh):
+        target.write_bytes(b"theirs")  # another process, between our check and our rename
+        fh.write(b"ours")
+
+    with pytest.raises(OutputExistsError, match=r"exists; pass force=True"):
+        atomic_write(target, racing)
+    assert target.read_bytes() == b"theirs"
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]  # no temporary file
+
+
+@pytest.mark.parametrize("race", [False, True])
+def test_atomic_write_without_hard_links(tmp_path, monkeypatch, race):
+    """A file system without hard links (FAT, some network shares): written by rename; a target that appeared is still refused."""
+    import errno
+
+    def no_links(src, dst):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(os, "link", no_links)
+    target = tmp_path / "x.bin"
+
+    def writer(fh):
+        if race:
+            target.write_bytes(b"theirs")
+        fh.write(b"ours")
+
+    if race:
+        with pytest.raises(OutputExistsError, match=r"exists; pass force=True"):
+            atomic_write(target, writer)
+    else:
+        assert atomic_write(target, writer) == target
+    assert target.read_bytes() == (b"theirs" if race else b"ours")
+    assert [p.name for p in tmp_path.iterdir()] == ["x.bin"]
+
+
+# ------------------------------------------------------------------ more PLY and point paths
+
+
+def test_ply_refuses_non_numbers_and_mismatched_colours(tmp_path):
+    with pytest.raises(TypeError, match=r"^points_xyz must be a real numeric array, got dtype <U1$"):
+        write_ply(tmp_path / "p.ply", np.array([["a", "b", "c"]]))
+    with pytest.raises(TypeError, match=r"^points_xyz must be a real numeric array, got dtype complex128$"):
+        write_ply(tmp_path / "p.ply", np.ones((2, 3), complex))
+    with pytest.raises(ValueError, match=r"^colors must have shape \(2, 3\) like points_xyz, got shape \(3, 3\)$"):
+        write_ply(tmp_path / "p.ply", np.ones((2, 3)), colors=np.zeros((3, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_depth_to_points_principal_point_and_float_colours():
+    z = np.full((2, 2), 4.0)
+    for name in ("cx_px", "cy_px"):
+        with pytest.raises(ValueError, match=rf"^{name} must be a finite number, got nan$"):
+            depth_to_points(z, focal_px=2.0, **{name: np.nan})
+    image = np.array([[-3.0, 100.4], [np.nan, 300.0]])  # float: rounded, clipped to 0..255, NaN black
+    pts, col = depth_to_points(z, focal_px=2.0, image=image)
+    np.testing.assert_array_equal(col, [[0, 0, 0], [100, 100, 100], [0, 0, 0], [255, 255, 255]])
+    assert col.dtype == np.uint8
+    # (col - 0.5) * 4 / 2, (row - 0.5) * 4 / 2
+    np.testing.assert_array_equal(pts, np.array([[-1, -1, 4], [1, -1, 4], [-1, 1, 4], [1, 1, 4]], np.float32))
+    rgb16 = np.zeros((2, 2, 3), np.uint16)
+    rgb16[0, 1] = (10, 200, 65535)
+    _, col16 = depth_to_points(z, focal_px=2.0, image=rgb16)
+    np.testing.assert_array_equal(col16[1], [10, 200, 255])  # not scaled: clipped (to_rgb8 scales)

@@ -95,3 +95,16 @@ def test_a_percentile_outside_0_100_is_refused_as_numpy_does(q, backend):
         _quantile.percentile(a, q)
     with pytest.raises(ValueError, match="Percentiles must be in the range"):
         _quantile.percentiles(a, [1.0, q])
+
+
+def test_nan_beyond_the_bracket_is_numpys(backend):
+    """5 % NaN: np.partition puts them at the top of the subsample, so the bracket of a high
+    percentile is NaN itself (the early fall-back); lower ones count past the NaN. Either way
+    NumPy's answer: NaN."""
+    a = np.random.default_rng(3).random(50_000)
+    a[::20] = np.nan
+    assert _quantile._order_statistics(a, int(0.99 * (a.size - 1)), int(0.99 * (a.size - 1)) + 1) is None
+    for q in (99.0, 99.9, 50.0):
+        assert np.isnan(_quantile.percentile(a, q)) and np.isnan(np.percentile(a, q))
+    assert np.isnan(_quantile.percentiles(a, [1.0, 99.5])).all()
+    assert np.isnan(_quantile.median(a))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import re
 from pathlib import Path
 
 import cv2
@@ -153,6 +154,9 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["camera"].update(focal_px=-100.0), r"camera\.focal_px = -100\.0: expected a number > 0"),
         (lambda d: d["camera"].update(focal_px="100"), r"camera\.focal_px = '100': expected a finite number"),
         (lambda d: d["camera"].update(width_px=200.5), r"camera\.width_px = 200\.5: expected a positive integer"),
+        (lambda d: d["camera"].pop("width_px"), r"^camera\.width_px is missing: expected a positive integer \(pixels\)$"),
+        (lambda d: d["video"].pop("velocity") and d["video"].update(poses=5), r"^video\.poses = 5: expected a path to a CSV file \(frame,x,y,z\[,rx,ry,rz\]\)$"),
+        (lambda d: d["video"].pop("velocity") and d["video"].update(poses=""), r"^video\.poses = '': expected a path to a CSV file"),
         (lambda d: d["camera"].update(height_px=0), r"camera\.height_px = 0: expected a positive integer"),
         (lambda d: d["camera"].update(focal=100), r"camera\.focal: unknown key"),
         (lambda d: d.update(extra={}), r"rig\.extra: unknown key"),
@@ -309,6 +313,8 @@ def test_load_rig_file_errors(tmp_path):
         ("frame,x,y\n0,0,0\n", r"line 1: header 'frame,x,y'"),
         ("frame,x,y,z\n0,0,0\n", r"line 2: 3 columns: expected 4"),
         ("frame,x,y,z\n0.5,0,0,0\n", r"line 2: frame = '0.5': expected an integer"),
+        ("frame,x,y,z\nfirst,0,0,0\n", r"line 2: frame = 'first': expected an integer frame index$"),
+        ("frame,x,y,z\n-1,0,0,0\n", r"line 2: frame = '-1': expected an integer frame index >= 0$"),
         ("frame,x,y,z\n0,0,abc,0\n", r"line 2: y = 'abc': expected a finite number"),
         ("frame,x,y,z\n1,0,0,0\n0,1,0,0\n", r"line 3: frame indices must be strictly increasing"),
         ("frame,x,y,z\n", r"no data rows"),
@@ -432,3 +438,54 @@ def test_dynamic_cli_figure(tmp_path, capsys, paper_pngs):
     assert (tmp_path / "fig_std.png").read_bytes()[:4] == b"\x89PNG"
     code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, "--out", tmp_path / "y.tif", "--figure", tmp_path / "z.tif")
     assert code == 2 and "--figure" in err and ".png" in err
+
+
+def test_rig_from_dict_top_level_and_whole_number_sizes():
+    with pytest.raises(RigError, match=r"^rig: expected a table of sections, got list$"):
+        rig_from_dict([BASE])
+    d = copy.deepcopy(BASE)
+    d["camera"].update(width_px=320.0, height_px=240.0)  # TOML floats with a whole value: sizes in pixels
+    cam = rig_from_dict(d).camera
+    assert (cam.width_px, cam.height_px) == (320, 240) and type(cam.width_px) is int
+    assert cam.cx_px == 159.5 and cam.cy_px == 119.5
+
+
+def test_rig_from_dict_takes_numpy_scalars():
+    """The library takes NumPy scalars where it takes Python numbers (test_bad_input); a dict built from a calibration holds them."""
+    d = copy.deepcopy(BASE)
+    d["camera"].update(focal_px=np.float32(100.0), width_px=np.int64(200), height_px=np.int32(200))
+    d["motion"].update(velocity=[np.float32(2.0), 0.0, 0.0])
+    assert rig_from_dict(d) == rig_from_dict(BASE)  # was: RigError "camera.focal_px = 100.0: expected a finite number"
+
+
+def test_load_rig_that_is_not_utf8(tmp_path, capsys, paper_pngs):
+    rig = tmp_path / "latin1.toml"
+    rig.write_bytes("# caméra\n[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n".encode("latin-1"))
+    with pytest.raises(RigError, match=rf"^rig '{re.escape(str(rig))}': not a UTF-8 text file$"):
+        load_rig(rig)
+    code, out, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", rig, "--out", tmp_path / "z.tif")
+    assert (code, out, err) == (2, "", f"nfdepth: error: rig '{rig}': not a UTF-8 text file\n")
+    with pytest.raises(FileNotFoundError, match=rf"^cannot read rig file '{re.escape(str(tmp_path))}': it is a directory$"):
+        load_rig(tmp_path)
+    with pytest.raises(FileNotFoundError, match=rf"^cannot read poses file '{re.escape(str(tmp_path / 'p.csv'))}': no such file$"):
+        load_poses(tmp_path / "p.csv")
+
+
+def test_dynamic_cli_refused_before_any_work(tmp_path, capsys, paper_pngs):
+    """Clashing outputs, a negative --sigma-px, images and videos at once: one line, exit 2, nothing written."""
+    out = tmp_path / "z.tif"
+    cases = [
+        (["--out", out, "--uncertainty", tmp_path / "." / "z.tif"], "output paths must differ from each other"),
+        (["--out", out, "--csv", tmp_path / "p.csv", "--ply", tmp_path / "p.ply", "--preview", tmp_path / "z.png", "--figure", tmp_path / "z.png"],
+         "output paths must differ from each other"),
+        (["--out", out, "--sigma-px", "-1"], "--sigma-px must be a finite number >= 0, got -1"),
+        (["--out", out, "--sigma-px", "nan"], "--sigma-px must be a finite number >= 0, got nan"),
+        (["--out", tmp_path / "c.npz", "--moving-video", tmp_path, "--reference-video", tmp_path, "--crossings", "2"],
+         "give either five images or --moving-video and --reference-video, not both"),
+        (["--out", tmp_path / "c.npz", "--reference-video", tmp_path], "two synchronised videos need both --moving-video and --reference-video"),
+    ]
+    before = sorted(tmp_path.rglob("*"))
+    for extra, line in cases:
+        code, stdout, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, *extra)
+        assert (code, stdout, err) == (2, "", f"nfdepth: error: {line}\n"), extra
+    assert sorted(tmp_path.rglob("*")) == before

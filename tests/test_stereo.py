@@ -347,6 +347,186 @@ def test_bad_input(kwargs, match):
         static_stereo(args.pop("views"), **args)
 
 
+def test_bad_option_messages():
+    """Each refusal names the option, what it got and what it takes."""
+    views = _plane_views(1.0)
+    cases = [
+        ({"median_px": 2}, ValueError, r"^median_px must be 0, 1, 3 or 5, got 2$"),
+        ({"aggregation": "box"}, ValueError, r"^aggregation must be 'guided' or 'gaussian', got 'box'$"),
+        ({"positions": ["a", "b", "c"]}, TypeError, r"^positions must be 3 numbers, got \['a', 'b', 'c'\]$"),
+    ]
+    for kwargs, exc, match in cases:
+        with pytest.raises(exc, match=match):
+            static_stereo(views, reference=1, **kwargs)
+    r = static_stereo(views, reference=1)
+    with pytest.raises(ValueError, match=r"^disparity_offset_px must be finite, got nan$"):
+        r.depth(focal_px=100.0, baseline=1.0, disparity_offset_px=float("nan"))
+
+
+def _step_views():
+    """Left half at 4 px, right half (foreground, occluding) at 7 px, three views; and the truth."""
+    h, w = SHAPE
+    fg, bg = _texture(seed=1), _texture(seed=2)
+    cols = np.arange(w)[None, :]
+    views = [np.where(cols >= w // 2 - t * 7.0, _shift_cols(fg, -t * 7.0), _shift_cols(bg, -t * 4.0)).astype(np.float32) for t in (-1, 0, 1)]
+    truth = np.where(cols >= w // 2, 7.0, 4.0) * np.ones((h, 1))
+    return views, truth
+
+
+def test_propagation_restores_the_depth_step_the_differential_field_blurs():
+    """Without the cost volume the dense field is the pyramid's windowed differential
+    estimate, which smears the 4 -> 7 px step over the window; PatchMatch-style propagation
+    gives each pixel the best-matching disparity of its neighbours (stereo._propagate).
+    Measured within 6 px of the step (~600 dense pixels): off by more than 1 px 23.7 %
+    without, 13.0 % after one round, 6.7 % after two; away from the step the median error
+    0.011 px drops to 0.0002 px. Bounds: half the unpropagated share and 0.12; a
+    propagation that did nothing (or kept the worse candidate) stays at 23.7 %."""
+    views, truth = _step_views()
+    h, w = SHAPE
+    dist = np.abs(np.arange(w) - w // 2)[None, :] * np.ones((h, 1))
+    inner = _inner(SHAPE)
+
+    def near_and_far(r):
+        dense = np.isfinite(r.disparity) & inner & ~r.edge_mask
+        err = np.abs(r.disparity - truth)
+        near, far = dense & (dist <= 6), dense & (dist >= 12)
+        assert near.sum() > 400 and far.sum() > 1500
+        return np.mean(err[near] > 1.0), np.median(err[far])
+
+    plain = near_and_far(static_stereo(views, reference=1, cost_volume=False))
+    propagated = near_and_far(static_stereo(views, reference=1, cost_volume=False, propagate_rounds=2))
+    assert plain[0] > 0.15  # the smeared step: the case propagation is for
+    assert propagated[0] < min(0.5 * plain[0], 0.12)
+    assert propagated[1] < 0.005
+    # propagate_levels=0 runs it at no level: the unpropagated map, bit for bit
+    off = static_stereo(views, reference=1, cost_volume=False, propagate_rounds=2, propagate_levels=0)
+    np.testing.assert_array_equal(off.disparity, static_stereo(views, reference=1, cost_volume=False).disparity)
+
+
+@pytest.mark.parametrize("step", [0.5, 1.0])
+def test_polish_removes_the_cost_volumes_subsample_bias_within_half_a_step(step):
+    """The cost volume's winner (equiangular fit between candidates) is biased toward the
+    candidates (pixel locking); the differential polish after it refines each pixel within
+    half a candidate step of the discrete field. On a slanted plane (exact truth, noise 0.5)
+    the dense median error was 0.052 / 0.122 px (steps 0.5 / 1 px) and is 0.014 / 0.020 px
+    polished: bound 0.4x and 0.03 px. The clip is active (1.6 % / 0.3 % of the pixels sit at
+    it), so the half-step bound is tested, to float32 rounding at ~7 px (1 ulp 5e-7)."""
+    views, truth = _slanted_plane_views(3.0, 0.03, noise=0.5, min_wavelength_px=4.0)
+    base = static_stereo(views, reference=1, noise_std=0.5, cost_step_px=step)
+    polished = static_stereo(views, reference=1, noise_std=0.5, cost_step_px=step, polish_iterations=2)
+    both = np.isfinite(base.disparity) & np.isfinite(polished.disparity) & ~base.edge_mask & ~polished.edge_mask
+    assert both.mean() > 0.8
+    before = np.median(np.abs(base.disparity - truth)[both])
+    after = np.median(np.abs(polished.disparity - truth)[both])
+    assert before > 0.04  # the bias the polish is for
+    assert after < min(0.4 * before, 0.03), (before, after)
+    moved = np.abs(polished.disparity - base.disparity)[both]
+    assert moved.max() <= 0.5 * step + 2e-6
+    assert np.mean(moved > 0.5 * step - 1e-3) > 0.001  # some pixels are held by the clip
+
+
+@pytest.mark.parametrize("d0", [0.3, 2.5, 6.0])
+def test_gaussian_aggregation_recovers_a_plane(d0):
+    """aggregation="gaussian": the per-level update is the plain normalised convolution
+    (num / den) instead of the weighted guided filter. Without the cost volume the dense
+    field is that update's result: measured median error 0.0034 / 0.0002 / 0.0000 px and
+    at most 0.012 px at 0.3 / 2.5 / 6 px per view (the guided filter's: 0.0036 / 0.0003 /
+    0.0000). Bounds 0.01 px median, 0.05 px max; the two aggregations give different maps."""
+    views = _plane_views(d0)
+    r = static_stereo(views, reference=1, cost_volume=False, aggregation="gaussian")
+    dense = np.isfinite(r.disparity) & _inner(SHAPE) & ~r.edge_mask
+    assert dense.sum() > 0.8 * _inner(SHAPE).sum()
+    err = np.abs(r.disparity - d0)[dense]
+    assert np.median(err) < 0.01 and err.max() < 0.05
+    guided = static_stereo(views, reference=1, cost_volume=False)
+    assert not np.array_equal(guided.disparity, r.disparity, equal_nan=True)
+
+
+@pytest.mark.parametrize("noise", [0.5, 2.0])
+def test_unsmoothed_views_keep_a_calibrated_uncertainty(noise):
+    """sigma_px=0: no Gaussian before the stencil, whose noise gain is then that of the
+    half-shift and cell mean alone ([1 2 1] / 4 per axis: 0.375, against 0.229 at 1 px).
+    The edge points' median |error| / std on a slanted plane with exact truth measured
+    1.27 / 0.94 of a Gaussian's 0.674 (noise 0.5 / 2); the project's calibration bound is a
+    factor 1.5. (An overestimated gain shows: twice 0.375 fails; one too small is absorbed,
+    as the std then follows the fit's own residuals.) Dense median error 0.03-0.04 px."""
+    views, truth = _slanted_plane_views(3.0, 0.0125, noise=noise, min_wavelength_px=4.0)
+    r = static_stereo(views, reference=1, noise_std=noise, sigma_px=0.0)
+    inner = _inner(truth.shape, margin=12)
+    edges = np.isfinite(r.disparity) & r.edge_mask & inner
+    dense = np.isfinite(r.disparity) & ~r.edge_mask & inner
+    assert edges.sum() > 500 and dense.sum() > 0.7 * inner.sum()
+    ratio = np.median(np.abs(r.disparity - truth)[edges] / r.uncertainty[edges]) / 0.674
+    assert 1 / 1.5 <= ratio <= 1.5, ratio
+    assert np.median(np.abs(r.disparity - truth)[dense]) < 0.06
+
+
+def _striped_views(d0=2.0):
+    """A plane at ``d0`` whose left half holds vertical stripes of period 4 px: a shift of
+    ``d0 = 2`` px inverts them, so candidates 4 px apart match about equally well."""
+    h, w = SHAPE
+    cols = np.arange(w)[None, :] * np.ones((h, 1))
+    stripes = [100.0 + 40.0 * np.sin(2.0 * np.pi * (cols + t * d0) / 4.0) for t in (-1, 0, 1)]
+    return [np.where(cols < 56, s, _shift_cols(TEXTURE, -t * d0)).astype(np.float32) for s, t in zip(stripes, (-1, 0, 1))]
+
+
+def test_a_zero_cost_margin_turns_the_uniqueness_test_off():
+    """min_cost_margin=0 is documented as "no test": on the ambiguous stripes the default
+    marks 3243 pixels UNCERTAIN (measured), without the test none; every pixel valid with
+    the test stays valid with the same value (the winners do not depend on it)."""
+    views = _striped_views()
+    tested = static_stereo(views, reference=1)
+    free = static_stereo(views, reference=1, min_cost_margin=0.0)
+    assert np.count_nonzero(tested.reason == Reason.UNCERTAIN) > 2000
+    assert np.count_nonzero(free.reason == Reason.UNCERTAIN) == 0
+    assert free.valid[tested.valid].all() and free.valid.sum() > tested.valid.sum()
+    np.testing.assert_array_equal(free.disparity[tested.valid], tested.disparity[tested.valid])
+
+
+def test_a_zero_edge_cost_margin_keeps_ambiguous_edge_points():
+    """edge_cost_margin=0 ("no test"): the stripes' edge points, UNCERTAIN for their margin by
+    default (686 of them, none NOT_POSITIVE), now reach the sign rule: their point-wise
+    estimates of the inverted stripes go negative (528 NOT_POSITIVE, measured; it warns)."""
+    views = _striped_views()
+    left = _inner(SHAPE) & (np.arange(SHAPE[1]) < 50)[None, :]
+    tested = static_stereo(views, reference=1, edges_only=True)
+    with pytest.warns(UserWarning, match=r"determinable pixels have a negative disparity"):
+        free = static_stereo(views, reference=1, edges_only=True, edge_cost_margin=0.0)
+    np.testing.assert_array_equal(free.edge_mask, tested.edge_mask)
+    on = tested.edge_mask & left
+    assert np.count_nonzero(tested.reason[on] == Reason.UNCERTAIN) > 500
+    assert np.count_nonzero(tested.reason[on] == Reason.NOT_POSITIVE) == 0
+    assert np.count_nonzero(free.reason[on] == Reason.NOT_POSITIVE) > 300
+    # the edge points that passed every test are untouched
+    ok = tested.valid
+    assert free.valid[ok].all()
+    np.testing.assert_array_equal(free.disparity[ok], tested.disparity[ok])
+
+
+def test_a_zero_edge_step_keeps_the_edge_points_on_the_far_side():
+    """edge_step_px=0 ("no test"): edge points within 8 px of the 4 -> 7 px step whose pixel
+    looks like the far side are no longer UNCERTAIN. With the other edge tests off, measured
+    112 accepted with the rule and 129 without; the rule only removes points."""
+    views, _ = _step_views()
+    w = SHAPE[1]
+    near = _inner(SHAPE) & (np.abs(np.arange(w) - w // 2) <= 8)[None, :]
+    loose = {"edges_only": True, "max_edge_disagreement_px": np.inf, "max_edge_std_px": np.inf}
+    tested = static_stereo(views, reference=1, **loose)
+    free = static_stereo(views, reference=1, edge_step_px=0.0, **loose)
+    assert free.valid[tested.valid].all()
+    np.testing.assert_array_equal(free.disparity[tested.valid], tested.disparity[tested.valid])
+    assert np.count_nonzero(free.valid & near) >= np.count_nonzero(tested.valid & near) + 10
+
+
+def test_cost_median_sizes_0_and_1_are_both_none():
+    """cost_median_px "0 or 1: none": the same map; 3 (the default) filters it."""
+    views, _ = _step_views()
+    zero = static_stereo(views, reference=1, cost_median_px=0)
+    one = static_stereo(views, reference=1, cost_median_px=1)
+    np.testing.assert_array_equal(zero.disparity, one.disparity)
+    assert not np.array_equal(zero.disparity, static_stereo(views, reference=1).disparity, equal_nan=True)
+
+
 # ---------------------------------------------------------------- real data
 
 

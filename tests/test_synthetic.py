@@ -308,3 +308,88 @@ def test_polyhedron_validation_and_orientation_fix():
         ConvexPolyhedron(v, p.faces, [1.0, 2.0])
     with pytest.raises(ValueError, match="outside 0..4"):
         ConvexPolyhedron(v, [(0, 1, 9)] + list(p.faces[1:]), p.intensities)
+
+
+@pytest.mark.parametrize(
+    ("edit", "exc", "message"),
+    [
+        (lambda v, f, i: ("abc", f, i), TypeError, "vertices must be an (N, 3) array of numbers, got 'abc'"),
+        (lambda v, f, i: (v[:, :2], f, i), ValueError, "vertices must have shape (N, 3) with N >= 4, got shape (5, 2)"),
+        (lambda v, f, i: (v[:3], f, i), ValueError, "vertices must have shape (N, 3) with N >= 4, got shape (3, 3)"),
+        (lambda v, f, i: (np.where(np.arange(15).reshape(5, 3) == 4, np.nan, v), f, i), ValueError, "vertices must be finite"),
+        (lambda v, f, i: (v, [(0, 1, "x")] + f[1:], i), TypeError, "faces must be a sequence of sequences of vertex indices, got [(0, 1, 'x'), "),
+        (lambda v, f, i: (v, 7, i), TypeError, "faces must be a sequence of sequences of vertex indices, got 7"),
+        (lambda v, f, i: (v, f[:3], i[:3]), ValueError, "faces must hold at least 4 faces for a closed solid, got 3"),
+        (lambda v, f, i: (v, f, ["a"] * 5), TypeError, "intensities must be numbers, got ['a', 'a', 'a', 'a', 'a']"),
+        (lambda v, f, i: (v, f, [1.0, 2.0, np.inf, 4.0, 5.0]), ValueError, "intensities must be finite, got [1.0, 2.0, inf, 4.0, 5.0]"),
+        (lambda v, f, i: (np.zeros((5, 3)), f, i), ValueError, "vertices must not all coincide"),
+        (lambda v, f, i: (v, [(0, 1)] + f[1:], i), ValueError, "faces[0] must list at least 3 distinct vertex indices, got (0, 1)"),
+        (lambda v, f, i: (v, f[:1] + [(1, 2, 2)] + f[2:], i), ValueError, "faces[1] must list at least 3 distinct vertex indices, got (1, 2, 2)"),
+        (lambda v, f, i: (v, f[:2] + [(-1, 0, 1)] + f[3:], i), ValueError, "faces[2] has a vertex index outside 0..4: (-1, 0, 1)"),
+    ],
+)
+def test_polyhedron_refuses_bad_definitions(edit, exc, message):
+    p = paper_pyramid()
+    v, f, i = edit(p.vertices.copy(), list(p.faces), list(p.intensities))
+    with pytest.raises(exc) as info:
+        ConvexPolyhedron(v, f, i)
+    assert str(info.value).startswith(message), str(info.value)
+    assert type(info.value) is exc
+
+
+def test_polyhedron_refuses_degenerate_and_non_convex_faces():
+    # a unit cube; face 0 is the bottom square (0, 1, 3, 2) in the z = 0 plane
+    v = np.array([(x, y, z) for z in (0.0, 1.0) for y in (0.0, 1.0) for x in (0.0, 1.0)])
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    cube = ConvexPolyhedron(v, faces, [1.0] * 6)
+    assert len(cube.faces) == 6
+    # three collinear vertices: a face of zero area
+    w = np.vstack([v, [(0.5, 0.0, 0.0)]])
+    with pytest.raises(ValueError, match=r"^faces\[0\] \(0, 8, 1\) is degenerate \(zero area\)$"):
+        ConvexPolyhedron(w, [(0, 8, 1)] + faces[1:], [1.0] * 6)
+    # the bottom square with a dent: a reflex vertex at (0.5, 0.3, 0)
+    w = np.vstack([v, [(0.5, 0.3, 0.0)]])
+    with pytest.raises(ValueError, match=r"^faces\[0\] \(0, 8, 1, 3, 2\) is not a convex polygon in the given vertex order$"):
+        ConvexPolyhedron(w, [(0, 8, 1, 3, 2)] + faces[1:], [1.0] * 6)
+
+
+def test_polygon_coverage_bad_input_and_empty_cases():
+    tri = [(1.0, 1.0), (5.0, 1.0), (1.0, 4.0)]
+    for bad, message in (([(0, 0), (1, 1)], "vertices_px must have shape (M, 2) with M >= 3, got shape (2, 2)"),
+                         ([(0, 0, 0)] * 3, "vertices_px must have shape (M, 2) with M >= 3, got shape (3, 3)"),
+                         ([(0, 0), (1, np.nan), (2, 0)], "vertices_px must be finite")):
+        with pytest.raises(ValueError) as info:
+            polygon_coverage(bad, (8, 8))
+        assert str(info.value) == message
+    with pytest.raises(TypeError, match=r"^shape must be \(rows, cols\), got 8$"):
+        polygon_coverage(tri, 8)
+    with pytest.raises(ValueError, match=r"^shape must be positive, got \(0, 8\)$"):
+        polygon_coverage(tri, (0, 8))
+    # wholly outside the image, or of zero area (collinear vertices): no coverage
+    np.testing.assert_array_equal(polygon_coverage([(20.0, 20.0), (30.0, 20.0), (20.0, 30.0)], (8, 8)), np.zeros((8, 8)))
+    np.testing.assert_array_equal(polygon_coverage([(1.0, 1.0), (3.0, 3.0), (6.0, 6.0)], (8, 8)), np.zeros((8, 8)))
+    assert polygon_coverage(tri, (8, 8)).sum() == pytest.approx(6.0, abs=EXACT)  # the area, 4 x 3 / 2
+
+
+def test_render_an_object_outside_the_view():
+    """A face turned toward the camera but projected beside the image covers no pixel: background and infinite depth."""
+    box = _box(1000.0, 1100.0, -50.0, 50.0, 300.0, 400.0, intensity=10.0)
+    r = render(box, paper_camera(), background=255.0)
+    assert 0 in r.visible_faces  # the front face (Z = 300) is turned toward the camera
+    np.testing.assert_array_equal(r.image, np.full((200, 200), 255.0))
+    assert np.all(np.isinf(r.depth))
+
+
+def test_points_sequences_and_types_refused():
+    with pytest.raises(ValueError, match=r"^points must have shape \(\.\.\., 3\), got \(4, 2\)$"):
+        points_in_camera_frame(np.zeros((4, 2)))
+    with pytest.raises(TypeError, match=r"^object_motion must be a ObjectMotion or None, got str$"):
+        points_in_camera_frame(np.zeros((1, 3)), object_motion="spin")
+    with pytest.raises(TypeError, match=r"^polyhedron must be a ConvexPolyhedron, got NoneType$"):
+        render(None, paper_camera())
+    from nfdepth.synthetic import static_sequence
+
+    with pytest.raises(ValueError, match=r"^reference_index must be in 0\.\.2, got 3$"):
+        static_sequence(paper_pyramid(), paper_camera(), n_views=3, reference_index=3)
+    scene = static_sequence(paper_pyramid(), paper_camera(image_size_px=40), n_views=3, reference_index=2)
+    assert scene.reference_index == 2

@@ -622,3 +622,289 @@ def test_video_cli_poses_beyond_the_speed_range(tmp_path, capsys, sequence_dir, 
     code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rig, "--out", tmp_path / "h.npz", "--quiet")
     assert code == 2 and err.count("\n") == 1, err
     assert "far.toml': video.positions: the camera moves from (0, 0, 0) at frame 0 to (1e+300, 0, 0) at frame 1" in err
+
+
+# ------------------------------------------------------------------ more inputs and outputs
+
+
+def test_read_video_unsupported_extension(tmp_path):
+    from nfdepth.io import ImageReadError
+    from nfdepth.video import VIDEO_EXTENSIONS
+
+    p = tmp_path / "notes.txt"
+    p.write_text("x")
+    with pytest.raises(ImageReadError) as info:
+        read_video(p)
+    assert str(info.value) == (
+        f"cannot read video '{p}': unsupported extension '.txt'; give a video ({', '.join(VIDEO_EXTENSIONS)}), a folder of images or a glob pattern"
+    )
+
+
+def _garbage_video(tmp_path):
+    p = tmp_path / "clip.mp4"
+    p.write_bytes(b"this is not a video")
+    return p
+
+
+def test_video_file_opencv_cannot_open(tmp_path, capsys, rail_rig):
+    from nfdepth.io import ImageReadError
+
+    bad = _garbage_video(tmp_path)
+    source = read_video(bad)
+    assert source.paths is None and source.video == bad and len(source) == 0
+    with pytest.raises(ImageReadError, match=re.escape(f"cannot read video '{bad}': OpenCV could not open it")):
+        next(iter(source))
+    code, stdout, _ = run_cli(capsys, "video", bad, "--rig", rail_rig, "--out", tmp_path / "d.npz")
+    assert code == 3 and stdout == "" and not (tmp_path / "d.npz").exists()
+
+
+def test_video_cli_unopenable_file_is_one_line(tmp_path, capfd, rail_rig):
+    bad = _garbage_video(tmp_path)
+    code = main(["video", str(bad), "--rig", str(rail_rig), "--out", str(tmp_path / "d.npz")])
+    err = capfd.readouterr().err
+    assert code == 3
+    assert err == f"nfdepth: error: cannot read video '{bad}': OpenCV could not open it\n"  # was: two '[mov,mp4,...] moov atom not found' lines first
+
+
+def test_video_cli_short_video_file(tmp_path, capsys, scene):
+    """A video file's frame count is only known once read: two frames are refused after reading, with nothing written."""
+    avi = tmp_path / "two.avi"
+    writer = cv2.VideoWriter(str(avi), cv2.VideoWriter_fourcc(*"MJPG"), 10, (200, 200), True)
+    if not writer.isOpened():
+        pytest.skip("no MJPG writer in this OpenCV build")
+    for f in scene.frames[:2]:
+        writer.write(cv2.cvtColor(np.clip(f, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    writer.release()
+    rig = tmp_path / "rig.toml"
+    rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\nvelocity = [1.0, 0.0, 0.0]\n")
+    for out in (tmp_path / "d.npz", tmp_path / "folder"):
+        code, stdout, err = run_cli(capsys, "video", avi, "--rig", rig, "--out", out, "--quiet")
+        assert (code, stdout, err) == (2, "", f"nfdepth: error: video needs at least 3 frames, '{avi}' gave 2\n")
+        assert not out.exists()
+
+
+def test_video_cli_out_folder_errors(tmp_path, capsys, sequence_dir, rail_rig):
+    afile = tmp_path / "results"
+    afile.write_text("x")
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", afile)
+    assert (code, err) == (4, f"nfdepth: error: --out '{afile}' exists and is not a folder\n")
+    assert afile.read_text() == "x"
+    missing = tmp_path / "nodir" / "out"
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", missing)
+    assert (code, err) == (4, f"nfdepth: error: --out '{missing}': directory '{tmp_path / 'nodir'}' does not exist\n")
+    assert not (tmp_path / "nodir").exists()
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "d.npz", "--sigma-px", "-1")
+    assert (code, err) == (2, "nfdepth: error: --sigma-px must be a finite number >= 0, got -1\n")
+
+
+def test_video_cli_progress_on_a_terminal_ends_its_line_before_an_error(tmp_path, monkeypatch, sequence_dir, rail_rig):
+    """On a terminal the bar redraws in place ('\\r'); an error starts on a line of its own."""
+    import io as _io
+    import sys
+    import types
+
+    from nfdepth import _cli_rig
+
+    class Terminal(_io.StringIO):
+        def isatty(self):
+            return True
+
+    clock = iter(np.arange(1000.0, 2000.0, 0.5))  # every reading 0.5 s later: each frame redraws the bar
+    monkeypatch.setattr(_cli_rig, "time", types.SimpleNamespace(perf_counter=lambda: float(next(clock))))
+    broken = sequence_dir / "f6.png"
+    broken.write_bytes(broken.read_bytes()[:60])
+    term = Terminal()
+    monkeypatch.setattr(sys, "stderr", term)
+    code = main(["video", str(sequence_dir), "--rig", str(rail_rig), "--out", str(tmp_path / "d.npz")])
+    assert code == 3
+    text = term.getvalue()
+    bar, error = text.rsplit("\n", 2)[:2]
+    assert error == f"nfdepth: error: cannot read image '{broken}': OpenCV could not decode it as PNG (broken or truncated file?)"
+    redraws = bar.split("\r")
+    assert redraws[0] == "" and len(redraws) == 7  # frames 0..5 read, each drawn over the last
+    for k, line in enumerate(redraws[1:], 1):
+        filled = int(24 * k / N_FRAMES)
+        assert re.fullmatch(rf"video \[{'#' * filled}{'-' * (24 - filled)}\] {k}/{N_FRAMES} frames, \d+\.\d frames/s, ETA \d+ s", line), line
+    assert not (tmp_path / "d.npz").exists()
+
+
+class _FakeStream:
+    def __init__(self, tty):
+        self.tty, self.text = tty, ""
+
+    def isatty(self):
+        return self.tty
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+def _progress(monkeypatch, total, *, tty, quiet=False):
+    import types
+
+    from nfdepth import _cli_rig
+
+    now = [100.0]
+    monkeypatch.setattr(_cli_rig, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
+    stream = _FakeStream(tty)
+    return _cli_rig._Progress(total, quiet=quiet, stream=stream), stream, now
+
+
+def test_progress_bar_redraws_a_terminal_line_at_most_every_tenth_of_a_second(monkeypatch):
+    p, out, now = _progress(monkeypatch, 4, tty=True)
+    now[0] = 101.0
+    p.step()  # 1 frame in 1 s
+    assert out.text == "\rvideo [######------------------] 1/4 frames, 1.0 frames/s, ETA 3 s"
+    now[0] = 101.05
+    p.step()  # 0.05 s later: not redrawn
+    assert out.text.count("\r") == 1
+    now[0] = 103.0
+    p.step()
+    assert out.text.endswith("\rvideo [##################------] 3/4 frames, 1.0 frames/s, ETA 1 s")
+    p.abort()
+    assert out.text.endswith(" ETA 1 s\n")
+    now[0] = 104.0
+    p.step()  # 1 s after the last redraw: redrawn
+    p.close()
+    assert out.text.endswith("\rvideo [########################] 4/4 frames, 1.0 frames/s, ETA 0 s\rvideo [########################] 4/4 frames, 1.0 frames/s, ETA 0 s\n")
+
+
+def test_progress_in_a_log_writes_a_line_per_tenth_at_most_every_5_s(monkeypatch):
+    p, out, now = _progress(monkeypatch, 20, tty=False)
+    for k in range(1, 21):
+        now[0] = 100.0 + 2.0 * k  # a frame every 2 s
+        p.step()
+    # every 2nd frame is a tenth; a line when 5 s have passed since the last one: frames 4, 8, 12, 16, 20
+    lines = out.text.splitlines()
+    assert [line.split("] ")[1].split(" frames")[0] for line in lines] == ["4/20", "8/20", "12/20", "16/20", "20/20"]
+    assert lines[0] == "video [####--------------------] 4/20 frames, 0.5 frames/s, ETA 32 s"
+    p.abort()  # not a terminal: no line to end
+    assert out.text.count("\n") == 5
+
+
+def test_progress_without_a_frame_count_and_quiet(monkeypatch):
+    p, out, now = _progress(monkeypatch, 0, tty=True)  # a video whose container does not say how many frames
+    now[0] = 102.0
+    p.step(3)
+    p.close()
+    assert out.text == "\rvideo: 3 frames, 1.5 frames/s\rvideo: 3 frames, 1.5 frames/s\n"
+    q, quiet, now = _progress(monkeypatch, 5, tty=True, quiet=True)
+    now[0] = 101.0
+    q.step()
+    q.abort()
+    q.close()
+    assert quiet.text == ""
+
+
+# ------------------------------------------------------------------ library: arguments and outputs
+
+
+def test_depth_from_video_argument_errors(scene):
+    from nfdepth.camera import PinholeCamera
+    from nfdepth.rig import rig_from_dict
+
+    frames = list(scene.frames[:3])
+    with pytest.raises(TypeError, match=r"^depth_from_video needs a camera: pass rig=\.\.\. or camera=PinholeCamera\(\.\.\.\)$"):
+        next(depth_from_video(frames, velocity=STEP))
+    with pytest.raises(ValueError, match=r"^positions must have shape \(N, 3\) with finite values, got shape \(3, 2\)$"):
+        next(depth_from_video(frames, camera=scene.camera, positions=np.zeros((3, 2))))
+    with pytest.raises(ValueError, match=r"^positions must have shape \(N, 3\) with finite values, got shape \(3, 3\)$"):
+        next(depth_from_video(frames, camera=scene.camera, positions=[[0, 0, 0], [1, 0, 0], [np.nan, 0, 0]]))
+    cam = {"focal_px": 100, "width_px": 200, "height_px": 200}
+    with pytest.raises(RigError, match=r"^the rig has no \[video\] section: expected video\.velocity, video\.positions or video\.poses$"):
+        next(depth_from_video(frames, rig=rig_from_dict({"camera": cam})))
+    # frames of another size than the camera's
+    small = [f[:100, :120] for f in frames]
+    with pytest.raises(ValueError, match=r"^frame 7 has size 120x100, the camera 200x200$"):
+        next(depth_from_video(small, camera=scene.camera, velocity=STEP, first_frame=7))
+    with pytest.raises(RigError, match=r"camera\.width_px x camera\.height_px = 200x200 does not match frame 0 \(120x100\)"):
+        next(depth_from_video(small, rig=rig_from_dict({"camera": cam, "video": {"velocity": [1, 0, 0]}})))
+    # an explicit camera of the frames' size overrides the rig's
+    own = PinholeCamera(100.0, 120, 100)
+    assert len(list(depth_from_video(small, rig=rig_from_dict({"camera": cam, "video": {"velocity": [1, 0, 0]}}), camera=own))) == 1
+
+
+def test_rig_video_positions_equal_its_velocity(tmp_path, scene):
+    """[video] positions = [[0,0,0], [1,0,0], ...] is the same motion as velocity = [1, 0, 0]: bit-identical maps."""
+    head = "[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\n"
+    (tmp_path / "v.toml").write_text(head + "velocity = [1.0, 0.0, 0.0]\n")
+    (tmp_path / "p.toml").write_text(head + "positions = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]]\n")
+    a = list(depth_from_video(list(scene.frames[:5]), rig=load_rig(tmp_path / "v.toml")))
+    b = list(depth_from_video(list(scene.frames[:5]), rig=load_rig(tmp_path / "p.toml")))
+    assert [r.index for r in b] == [1, 2, 3]
+    for x, y in zip(a, b):
+        assert y.baseline == x.baseline == 1.0
+        np.testing.assert_array_equal(y.inverse_depth, x.inverse_depth)
+        np.testing.assert_array_equal(y.camera_position, x.camera_position)
+    assert np.isfinite(b[-1].inverse_depth).sum() > 300
+    (tmp_path / "s.toml").write_text(head + "positions = [[3, 0, 0], [3, 0, 0], [3, 0, 0]]\n")
+    with pytest.raises(RigError, match=re.escape(f"rig '{tmp_path / 's.toml'}': video.positions: the camera does not move: all 3 positions are (3, 0, 0)")):
+        next(depth_from_video(list(scene.frames[:3]), rig=load_rig(tmp_path / "s.toml")))
+
+
+def test_write_video_npz_without_a_camera(tmp_path, scene):
+    from nfdepth.video import NPZ_ARRAYS, write_video_npz
+
+    results = list(depth_from_video(list(scene.frames[:4]), camera=scene.camera, velocity=STEP))
+    path = write_video_npz(results, tmp_path / "v.npz")
+    with np.load(path) as data:
+        assert sorted(data.files) == sorted(["index", "camera_position", "baseline", *NPZ_ARRAYS])  # no focal_px, cx_px, cy_px
+        assert data["index"].tolist() == [1, 2] and data["baseline"].tolist() == [1.0, 1.0]
+        np.testing.assert_array_equal(data["camera_position"], [[1.0, 0, 0], [2.0, 0, 0]])
+        np.testing.assert_array_equal(data["depth"][1], results[1].depth)
+    empty = write_video_npz([], tmp_path / "e.npz", camera=scene.camera)
+    with np.load(empty) as data:
+        assert data["index"].shape == (0,) and data["camera_position"].shape == (0, 3) and data["depth"].shape == (0, 0, 0)
+        assert float(data["focal_px"]) == scene.camera.focal_px
+
+
+def test_flat_videos_give_empty_crossings_without_a_residual(tmp_path):
+    """No edge point at a crossing (textureless frames): an empty result, residual 0, and only the textureless warning."""
+    from nfdepth.video import dynamic_stereo_from_videos, write_crossings_npz
+
+    flat = [np.full((200, 200), 100.0)] * 5
+    with pytest.warns(UserWarning, match="no edge points: the images are textureless") as record:
+        (res,) = dynamic_stereo_from_videos(flat, flat, rig=load_rig(PAPER_RIG), crossings=[2])
+    assert len(record) == 1
+    assert res.index == 2 and len(res.result) == 0
+    assert res.registration_residual == 0.0 and res.noise_std == 0.0
+    assert not res.valid.any() and res.depth.shape == (200, 200)
+    path = write_crossings_npz([res], tmp_path / "c.npz")
+    with np.load(path) as data:
+        assert sorted(data.files) == ["crossing", "depth", "depth_std", "noise_std", "registration_residual"]
+        assert data["crossing"].tolist() == [2] and np.isnan(data["depth"]).all()
+
+
+def test_video_cli_missing_poses_file(tmp_path, capsys, sequence_dir, rail_rig):
+    missing = tmp_path / "poses.csv"
+    code, stdout, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--poses", missing, "--out", tmp_path / "d.npz")
+    assert (code, stdout, err) == (3, "", f"nfdepth: error: cannot read poses file '{missing}': no such file\n")
+    assert not (tmp_path / "d.npz").exists()
+
+
+def test_positions_that_run_out_are_refused(scene):
+    """The library's ``positions=`` are named as the argument (a ValueError), not as a rig key."""
+    with pytest.raises(ValueError, match=r"^positions has 3 entries: no position for frame 3 \(one per frame, from first_frame\)$") as info:
+        list(depth_from_video(list(scene.frames[:5]), camera=scene.camera, positions=[[0, 0, 0], [1, 0, 0], [2, 0, 0]]))
+    assert not isinstance(info.value, RigError)
+
+
+def test_video_cli_rig_positions_that_run_out_name_the_rig(tmp_path, capsys, sequence_dir):
+    """Every rig problem names the file (docs/rig-format.md, Errors); poses that run out do ('poses in 'p.csv': no row for frame 3')."""
+    rig = tmp_path / "short.toml"
+    rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\npositions = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n")
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rig, "--out", tmp_path / "d.npz", "--quiet")
+    assert code == 2 and not (tmp_path / "d.npz").exists()
+    assert f"'{rig}'" in err, err  # was: "nfdepth: error: video.positions has 3 entries: no position for frame 3"
+
+
+def test_video_cli_broken_frame_leaves_no_maps_in_the_folder(tmp_path, capsys, sequence_dir, rail_rig):
+    broken = sequence_dir / "f6.png"
+    broken.write_bytes(broken.read_bytes()[:60])
+    out = tmp_path / "maps"
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", out, "--quiet")
+    assert code == 3 and err.count("\n") == 1 and "f6.png': OpenCV could not decode it as PNG" in err
+    assert not out.exists() or list(out.iterdir()) == []  # was: depth_00000[1-4].tif and their std maps

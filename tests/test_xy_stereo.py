@@ -212,6 +212,29 @@ def test_views_of_another_size_are_refused():
         static_stereo_xy(row, small, row_reference=1, column_reference=1)
 
 
+def test_without_the_cost_volume_there_is_no_search_range():
+    """cost_volume=False: neither axis searches a range, so the fused result reports none;
+    with it, the range holding both axes' ranges. The differential fields of a slanted
+    plane (2-2.8 px, noise 1) fuse to the truth: measured median error 0.004 px, at most
+    0.026 px, on every inner pixel (bounds 0.01 and 0.05 px)."""
+    row, col, truth = slanted_plane_views(2.0, 0.01, shape=(64, 80), noise=1.0, column=True)
+    r = static_stereo_xy(row, col, row_reference=1, column_reference=1, noise_std=1.0, cost_volume=False)
+    assert r.search_range_px is None and r.row.search_range_px is None and r.column.search_range_px is None
+    inner = _inner(truth.shape)
+    ok = np.isfinite(r.disparity) & inner
+    assert ok.sum() > 0.95 * inner.sum()
+    err = np.abs(r.disparity - truth)[ok]
+    assert np.median(err) < 0.01 and err.max() < 0.05
+    searched = static_stereo_xy(row, col, row_reference=1, column_reference=1, noise_std=1.0)
+    (a, b), (c, d) = searched.row.search_range_px, searched.column.search_range_px
+    assert searched.search_range_px == (min(a, c), max(b, d))
+
+
+def test_fusion_refuses_maps_of_two_shapes():
+    with pytest.raises(ValueError, match=r"^the row's and the column's maps must have one shape, got \(1, 2\) and \(2, 1\)$"):
+        fuse_axes(_result([[1.0, 2.0]], [[0.1, 0.1]]), _result([[1.0], [2.0]], [[0.1], [0.1]]))
+
+
 # ------------------------------------------------------------------ the CLI
 
 

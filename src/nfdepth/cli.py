@@ -100,7 +100,7 @@ def _classify(exc: BaseException) -> int:
     name = type(exc).__name__
     if name == "ImageRangeError":  # the file was read; its values do not fit float32
         return EXIT_USAGE
-    if name in ("ImageReadError",):
+    if name in ("ImageReadError", "InputReadError"):
         return EXIT_READ
     if name in ("OutputExistsError", "OutputWriteError"):
         return EXIT_WRITE
@@ -650,7 +650,10 @@ def main(argv=None) -> int:
     previous_sigterm = None
     from . import io
 
-    io.COMPLETED_WRITES = []  # this run's outputs, removed if it is interrupted
+    io.COMPLETED_WRITES = []  # this run's outputs, removed if it is interrupted or fails
+    # FFmpeg's own log lines (a video OpenCV cannot open) would precede the one-line error;
+    # read when OpenCV opens its first video, so this holds for the run (a user's setting wins)
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     if threading.current_thread() is threading.main_thread():
         previous_sigterm = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
@@ -664,8 +667,8 @@ def main(argv=None) -> int:
             signal.signal(signal.SIGTERM, previous_sigterm)
 
 
-def _roll_back_outputs() -> str:
-    """Remove the files this interrupted run completed (the new ones); say what was done, for the one-line message."""
+def _roll_back_outputs(event: str = "the interruption") -> str:
+    """Remove the files this interrupted or failed run completed (the new ones); say what was done, for the one-line message."""
     from . import io
 
     removed, replaced = [], []
@@ -680,7 +683,7 @@ def _roll_back_outputs() -> str:
             replaced.append(str(path))
     note = f"; removed the {len(removed)} output(s) it had completed" if removed else ""
     if replaced:
-        note += f"; already written before the interruption: {', '.join(replaced)}"
+        note += f"; already written before {event}: {', '.join(replaced)}"
     return note
 
 
@@ -709,7 +712,7 @@ def _main(argv, debug: bool) -> int:
             if text.startswith(prefix):
                 text = text[len(prefix) :]
                 break
-        print(f"nfdepth: error: {text}", file=sys.stderr)
+        print(f"nfdepth: error: {text}{_roll_back_outputs('the error')}", file=sys.stderr)
         return exc.code
     except Exception as exc:  # noqa: BLE001 - the CLI's single error boundary
         if debug:  # the traceback, then the same line and exit code as without --debug
@@ -718,7 +721,8 @@ def _main(argv, debug: bool) -> int:
         text = " ".join(str(exc).split()) or type(exc).__name__
         if code == EXIT_INTERNAL:
             text = f"internal error ({type(exc).__name__}): {text}; rerun with --debug and report it"
-        print(f"nfdepth: error: {text}", file=sys.stderr)
+        # a failed run leaves none of its outputs, as an interrupted one
+        print(f"nfdepth: error: {text}{_roll_back_outputs('the error')}", file=sys.stderr)
         return code
 
 

@@ -390,8 +390,8 @@ def select_views(n_views: int, reference: int, views="all") -> list:
     ``"all"``: every view. ``"three"``: ``reference - 1, reference,
     reference + 1`` when both exist, else the reference and its next two (or,
     at the end of the row, its previous two); with fewer than three views,
-    all of them. A sequence of indices is returned as a list (checked later
-    by :func:`nfdepth.datasets.view_subset`).
+    all of them. A sequence of whole numbers is returned as a list of ints
+    (their range is checked later by :func:`nfdepth.datasets.view_subset`).
     """
     if isinstance(views, str):
         key = views.strip().lower()
@@ -407,11 +407,15 @@ def select_views(n_views: int, reference: int, views="all") -> list:
             return [reference - 2, reference - 1, reference]
         msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
         raise ValueError(msg)
+    msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
     try:
-        return [int(i) for i in views]
+        values = [float(i) for i in views]
     except (TypeError, ValueError):
-        msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
         raise ValueError(msg) from None
+    # whole numbers only (2.0 is view 2; 2.7 is no view, and True is no index)
+    if any(isinstance(i, (bool, np.bool_)) for i in views) or not all(v.is_integer() for v in values):
+        raise ValueError(msg)
+    return [int(v) for v in values]
 
 
 def _check_methods(methods) -> tuple:
@@ -613,11 +617,18 @@ def resolve_dataset(dataset, data=None) -> tuple:
     from . import datasets
 
     if not isinstance(dataset, (str, Path)):
-        names = []
+        roots, names = [], []
         for item in dataset:
             root, sub = resolve_dataset(item, data)
+            roots.append(Path(root).resolve())
             names.extend(sub)
-        return datasets.data_root(data), list(dict.fromkeys(names))
+        if not roots:
+            msg = "dataset is an empty list: give at least one scene name or data folder"
+            raise ValueError(msg)
+        if len(set(roots)) > 1:  # one root loads every scene: a folder keeps its own
+            msg = f"the datasets of a list must lie under one data root, got {', '.join(map(str, dict.fromkeys(roots)))}"
+            raise ValueError(msg)
+        return roots[0], list(dict.fromkeys(names))
     text = str(dataset).strip()
     key = text.lower().rstrip("/")
     if key == "all":

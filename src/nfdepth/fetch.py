@@ -444,9 +444,10 @@ def _usual_permissions(path: Path) -> None:
 def _write_text(path: Path, text: str) -> None:
     if path.is_file() and path.read_text(encoding="utf-8") == text:
         return
-    from .io import atomic_write
+    from .io import _kept_on_failure, atomic_write
 
-    atomic_write(path, lambda fh: fh.write(text.encode("utf-8")), force=True)
+    with _kept_on_failure():  # a completed set stays complete if a later one fails
+        atomic_write(path, lambda fh: fh.write(text.encode("utf-8")), force=True)
 
 
 def _sums_text(entries) -> str:

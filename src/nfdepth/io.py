@@ -27,6 +27,7 @@ or ``TypeError``.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import tempfile
@@ -40,6 +41,7 @@ import numpy as np
 from ._validate import NFDepthError, check_positive_finite, float_dtype
 
 __all__ = [
+    "InputReadError",
     "ImageReadError",
     "ImageRangeError",
     "OutputExistsError",
@@ -71,7 +73,11 @@ READ_EXTENSIONS = _CV2_EXTENSIONS + _TIFF_EXTENSIONS + (".pfm", ".npy")
 ARRAY_EXTENSIONS = (".pfm", ".tif", ".tiff", ".npy")
 
 
-class ImageReadError(NFDepthError):
+class InputReadError(NFDepthError):
+    """An input file or folder could not be read (an image, a rig, a poses file, a folder of frames)."""
+
+
+class ImageReadError(InputReadError):
     """An image file could not be read (missing, a directory, unsupported, broken)."""
 
 
@@ -370,8 +376,20 @@ def _current_umask() -> int:
 
 #: During a command-line run (else None): the files :func:`atomic_write` has
 #: completed, each with whether it replaced an existing file. An interrupted
-#: run removes its new files, so that it leaves no part of its outputs behind.
+#: or failed run removes its new files, so that it leaves no part of its
+#: outputs behind.
 COMPLETED_WRITES: list[tuple[Path, bool]] | None = None
+
+
+@contextlib.contextmanager
+def _kept_on_failure():
+    """Writes that outlive a failed or interrupted run (a download cache's completed sets): not in :data:`COMPLETED_WRITES`."""
+    global COMPLETED_WRITES  # the run's record, set by the command line
+    saved, COMPLETED_WRITES = COMPLETED_WRITES, None
+    try:
+        yield
+    finally:
+        COMPLETED_WRITES = saved
 
 
 def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool = False) -> Path:

@@ -56,6 +56,7 @@ from .camera import (
     _principal_point_expected,
     _principal_point_reach,
 )
+from .io import InputReadError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -104,7 +105,8 @@ def _fail(key: str, value: Any, expected: str) -> RigError:
 
 
 def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
+    """A real number, Python's or NumPy's (a dict built from a calibration holds NumPy scalars); no bool."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def _number(table: dict, section: str, name: str, *, required: bool = True, positive: bool = False, default=None):
@@ -126,7 +128,7 @@ def _integer(table: dict, section: str, name: str) -> int:
     if name not in table:
         raise RigError(f"{key} is missing: expected a positive integer (pixels)")
     value = table[name]
-    if isinstance(value, float) and value.is_integer():
+    if isinstance(value, (float, np.floating)) and float(value).is_integer() or isinstance(value, np.integer):
         value = int(value)
     if not isinstance(value, int) or isinstance(value, bool) or value < 1:
         raise _fail(key, value, "a positive integer (pixels)")
@@ -252,8 +254,13 @@ def load_poses(path) -> Poses:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"cannot read poses file '{path}': no such file")
-    with path.open(newline="") as fh:
-        rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+    try:
+        with path.open(newline="") as fh:
+            rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+    except UnicodeDecodeError:
+        raise RigError(f"poses '{path}': not a UTF-8 text file") from None
+    except OSError as exc:  # e.g. no read permission
+        raise InputReadError(f"cannot read poses file '{path}': {exc.strerror or exc}") from None
     if not rows:
         raise RigError(f"poses '{path}': the file is empty; expected a header frame,x,y,z[,rx,ry,rz]")
     header = [h.strip().lower() for h in rows[0]]
@@ -689,6 +696,8 @@ def load_rig(path) -> Rig:
         raise RigError(f"rig '{path}': not valid TOML: {exc}") from None
     except UnicodeDecodeError:
         raise RigError(f"rig '{path}': not a UTF-8 text file") from None
+    except OSError as exc:  # e.g. no read permission
+        raise InputReadError(f"cannot read rig file '{path}': {exc.strerror or exc}") from None
     try:
         return rig_from_dict(data, base_dir=path.parent, source=path)
     except RigError as exc:

@@ -1551,7 +1551,8 @@ def static_stereo(
     propagate_radius : int
         Box radius (px) of the guided cost aggregation of the propagation.
     polish_iterations : int
-        Differential updates after each propagation.
+        Differential updates after each propagation and after the cost
+        volume (there kept within half a candidate step of its winner).
     max_edge_disagreement_px : float
         Edge points whose point-wise estimate differs from the dense field by
         more than this are ``UNCERTAIN``. With ``edges_only=False`` a rejected

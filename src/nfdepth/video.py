@@ -191,7 +191,10 @@ def read_video(path) -> FrameSource:
     text = str(path)
     p = Path(text)
     if p.is_dir():
-        files = [f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READ_EXTENSIONS]
+        try:
+            files = [f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READ_EXTENSIONS]
+        except OSError as exc:  # e.g. no read permission
+            raise ImageReadError(f"cannot read frames from '{p}': {exc.strerror or exc}") from None
         if not files:
             raise ImageReadError(f"cannot read frames from '{p}': the folder has no image files ({', '.join(READ_EXTENSIONS)})")
         return FrameSource(paths=sorted(files, key=_natural_key))
@@ -450,6 +453,15 @@ def _spec_name(spec: VideoSpec, rig: Rig | None) -> str:
     return f"rig '{rig.source}': video.{key}" if rig.source else f"video.{key}"
 
 
+def _position(spec: VideoSpec, frame: int, name: str, rig: Rig | None) -> np.ndarray:
+    """The camera's position at ``frame``; positions that run out are named as :func:`_spec_name` names them (the rig file)."""
+    if spec.positions is not None and not 0 <= frame < len(spec.positions):
+        raise (ValueError if rig is None else RigError)(
+            f"{name} has {len(spec.positions)} entries: no position for frame {frame} (one per frame, from first_frame)"
+        )
+    return spec.camera_position(frame)
+
+
 def _check_spec_moves(spec: VideoSpec, rig: Rig | None) -> None:
     """Refuse a rig's positions / poses in which the camera never moves, or moves by steps outside the speed range."""
     if spec.poses is not None:
@@ -624,7 +636,7 @@ def depth_from_video(
         if rot0 is None:
             rot0 = _camera_rotation(spec, k - 1, None)
         rmat = Rotation.from_rotvec(np.deg2rad(_camera_rotation(spec, k, rot0))).as_matrix()
-        p_prev, p_mid, p_next = (spec.camera_position(i) for i in (k - 1, k, k + 1))
+        p_prev, p_mid, p_next = (_position(spec, i, motion_name, rig) for i in (k - 1, k, k + 1))
         _camera_rotation(spec, k + 1, rot0)
         step_cam = rmat.T @ ((p_next - p_prev) / 2.0)  # world -> camera axes
         baseline = float(np.linalg.norm(step_cam))
