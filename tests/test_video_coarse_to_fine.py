@@ -211,3 +211,12 @@ def test_cli_levels(tmp_path, capsys, monkeypatch):
     capsys.readouterr()
     assert np.median(rel["4"]) < 0.015
     assert np.median(rel["1"]) > 0.1
+
+
+def test_frames_without_edge_points_give_empty_maps():
+    """Flat frames through the pyramid: empty maps and the no-edge-point warning (was: cv2.remap's assertion on an empty map)."""
+    flat = [np.full((64, 80), 7.0, np.float32)] * 4
+    with pytest.warns(UserWarning, match="no edge points"):
+        frames = list(depth_from_video(flat, camera=PinholeCamera(100.0, 80, 64), velocity=(1.0, 0.0, 0.0)))
+    assert [f.index for f in frames] == [1, 2]
+    assert all(np.isnan(f.inverse_depth).all() and np.isnan(f.measured_inverse_depth).all() for f in frames)

@@ -122,6 +122,8 @@ def _at_points(image: np.ndarray, rows, cols) -> np.ndarray:
     """Bilinear samples of ``image`` (pixel centres at integers) at ``(rows, cols)``."""
     c = np.asarray(cols, np.float32)[None, :]
     r = np.asarray(rows, np.float32)[None, :]
+    if c.size == 0:  # no edge points (cv2.remap refuses an empty map)
+        return np.zeros(0)
     return cv2.remap(image, c, r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[0].astype(np.float64)
 
 
