@@ -32,8 +32,13 @@ no unit or focal length can overflow float32. So:
    prior's own normal flow ``B rho_prior`` is added back before eq. 4 is
    solved, so reason codes and uncertainties are those of the total. Points
    whose residual motion exceeds ``max_residual_px`` (the prior failed
-   there, e.g. at occlusion boundaries) are ``UNCERTAIN``; points whose warp
-   reads outside an outer frame are ``NO_DATA``.
+   there) are ``UNCERTAIN``, and so are points where the prior's motion
+   varies by more than ``edge_step_px`` px within 4 px: beside a depth
+   step one side of the edge is hidden in an outer frame and the truth of
+   the edge's pixel may be either surface, and there (and across a sharp
+   ridge) the smooth prior is least accurate. A plane slanted by more than
+   1/8 px of motion per px loses its points too. Points whose warp reads
+   outside an outer frame are ``NO_DATA``.
 """
 
 from __future__ import annotations
@@ -52,6 +57,7 @@ _ITERATIONS = 3  # warp-and-update passes per pyramid level
 _SIGMA_PX = 1.0  # smoothing at every level before the dense update
 _WINDOW_PX = 4.0  # std of the dense update's Gaussian window (px of that level)
 _RIDGE = 1e-3  # of the median window information: textureless windows keep their estimate
+_STEP_REACH_PX = 4  # the depth-step test looks this far either side of an edge point (the prior's window is 4 px)
 
 
 def flow_directions(camera: PinholeCamera, translation, shape, *, scale: float = 1.0):
@@ -127,13 +133,23 @@ def _at_points(image: np.ndarray, rows, cols) -> np.ndarray:
     return cv2.remap(image, c, r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[0].astype(np.float64)
 
 
-def edge_depth_coarse_to_fine(window, *, camera: PinholeCamera, baseline: float, direction, levels: int, max_residual_px: float = 1.0, **edge_options):
+def _step_span(motion: np.ndarray, reach_px: int) -> np.ndarray:
+    """Largest minus smallest ``motion`` within ``reach_px`` px (a square window): the step around each pixel."""
+    kernel = np.ones((2 * reach_px + 1, 2 * reach_px + 1), np.uint8)
+    return cv2.dilate(motion, kernel, borderType=cv2.BORDER_REPLICATE) - cv2.erode(motion, kernel, borderType=cv2.BORDER_REPLICATE)
+
+
+def edge_depth_coarse_to_fine(
+    window, *, camera: PinholeCamera, baseline: float, direction, levels: int, max_residual_px: float = 1.0, edge_step_px: float = 1.0, **edge_options
+):
     """Paper eq. 4 at the edge points of the middle frame, on the triple warped by :func:`dense_prior` (module docstring).
 
     ``window`` holds three float32 frames; ``baseline`` and ``direction``
     (unit, camera axes) are the camera's step per frame, as for
     :func:`nfdepth.pipelines.static_stereo_edges`, which gets
-    ``edge_options``. Returns its :class:`~nfdepth.pipelines.EdgeDepth`
+    ``edge_options``. Edge points where the prior's motion varies by more
+    than ``edge_step_px`` px within :data:`_STEP_REACH_PX` px are
+    ``UNCERTAIN`` (0: no test). Returns its :class:`~nfdepth.pipelines.EdgeDepth`
     with ``delta_vn`` and ``inverse_depth`` of the total motion and
     ``flows["residual"]``, the warped triple's normal flow.
     """
@@ -168,6 +184,11 @@ def edge_depth_coarse_to_fine(window, *, camera: PinholeCamera, baseline: float,
     outside = ~inside[ii, jj]
     inv.reason[ok & outside] = Reason.NO_DATA
     inv.reason[(inv.reason == Reason.OK) & ~(np.abs(res.delta_vn) <= max_residual_px)] = Reason.UNCERTAIN
+    if edge_step_px > 0:
+        # beside a depth step one side of the edge is hidden in an outer frame and the
+        # truth of the edge's pixel may be either surface; there the smooth prior errs most
+        motion = prior * np.hypot(a_col, a_row)  # px per frame
+        inv.reason[(inv.reason == Reason.OK) & (_step_span(motion, _STEP_REACH_PX)[ii, jj] > edge_step_px)] = Reason.UNCERTAIN
     bad = inv.reason != Reason.OK
     inv.rho[bad] = np.nan
     inv.rho_std[bad] = np.nan

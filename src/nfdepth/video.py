@@ -509,6 +509,7 @@ def depth_from_video(
     stencil: str = "matched",
     levels: int | None = None,
     max_residual_px: float = 1.0,
+    edge_step_px: float = 1.0,
 ) -> Iterator[VideoDepthFrame]:
     """Depth per frame of a camera translating through a static scene, fused over time.
 
@@ -553,6 +554,11 @@ def depth_from_video(
         the prior exceeds this (px per frame of normal flow) are
         ``UNCERTAIN`` (the prior failed there, e.g. at an occlusion
         boundary). At most 2 px, the differential method's range.
+    edge_step_px : float
+        With ``levels > 1``: edge points where the prior's motion varies by
+        more than this (px per frame) within 4 px are ``UNCERTAIN``: a depth
+        step, where one side of the edge is hidden in an outer frame, or a
+        plane slanted by more than 1/8 px per px (0: no test).
 
     Yields
     ------
@@ -598,6 +604,7 @@ def depth_from_video(
     first = check_int("first_frame", first_frame, 0)
     levels = _check_levels(levels, cam.shape)
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
+    edge_step_px = check_threshold("edge_step_px", edge_step_px)
     if max_residual_px > _MAX_RESIDUAL_PX:
         msg = (
             f"max_residual_px = {max_residual_px:g} px is beyond the differential method's range: expected at most"
@@ -670,6 +677,7 @@ def depth_from_video(
                         direction=step_cam / baseline,
                         levels=levels,
                         max_residual_px=max_residual_px,
+                        edge_step_px=edge_step_px,
                         **edge_options,
                     )
             behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
