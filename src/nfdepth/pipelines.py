@@ -315,6 +315,11 @@ def dynamic_stereo(
     )
 
 
+#: Largest normal displacement (px) a triple of :func:`static_stereo_edges` measures
+#: beside the nearest one: beyond it the three-frame stencil is biased.
+_MAX_TRIPLE_MOTION_PX = 1.25
+
+
 def static_stereo_edges(
     views,
     *,
@@ -355,6 +360,13 @@ def static_stereo_edges(
         Use the symmetric triples ``(ref - k, ref, ref + k)`` for
         ``k = 1 .. max_span`` (default: all that fit) and fuse their inverse
         depths by weighted least squares (:func:`nfdepth.depth.fuse_inverse_depth`).
+        At each point a triple ``k > 1`` counts only while the point's
+        displacement in it, ``k`` times its normal flow per step (measured by
+        the nearest triple), stays within 1.25 px: beyond it the three-frame
+        stencil is biased, and the farther triples, which weigh ``k**2`` more,
+        would carry that bias into the fused depth and an error bar blind
+        to it (7 views at 0.75-1 px per step: median error 2.4-3.8 %, 6-11
+        times the std, without this rule; 0.5-1.0 % and 0.75-0.9 with it).
 
     Returns
     -------
@@ -404,8 +416,14 @@ def static_stereo_edges(
         # All triples measure the same flow per unit step; combine them with
         # inverse-variance weights (B is common, so this is the WLS of eq. 4).
         # Without image noise (std 0) every triple gets the same weight.
+        # Triple k sees a point move by k times its flow per step: beyond about
+        # 1 px the stencil is biased (the differential range), so there only
+        # the nearer triples count (the first always does).
+        reach = np.abs(flows[0])
+        with np.errstate(invalid="ignore"):
+            used = [f if k == 1 else np.where(k * reach <= _MAX_TRIPLE_MOTION_PX, f, np.nan) for k, f in enumerate(flows, 1)]
         ones = np.ones_like(flows[0])
-        delta, fused_std, _ = fuse_inverse_depth(np.stack(flows), 0.0, ones, np.stack(stds) if noise > 0 else ones)
+        delta, fused_std, _ = fuse_inverse_depth(np.stack(used), 0.0, ones, np.stack(stds) if noise > 0 else ones)
         std = fused_std if noise > 0 else np.zeros_like(delta)
     edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
     return _edge_result(
