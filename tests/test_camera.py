@@ -185,5 +185,16 @@ def test_scaled_motion_is_checked_like_a_new_one():
     m = RigidMotion(translation=(1.0, 0.0, 0.0), rotation=(0.0, 0.0, 0.01))
     with pytest.raises(ValueError, match=r"^rotation = \[0, 0, 1e\+38\] rad per unit time: expected an angular velocity of at most 1e\+30"):
         m.scaled(1e40)
-    with pytest.raises(ValueError, match=r"^translation must be finite, got \[nan, nan, nan\]$"):
+
+
+def test_motion_arithmetic_refuses_what_is_not_a_motion():
+    """``RigidMotion + 5`` raised AttributeError and ``scaled("x")`` NumPy's ufunc error; now Python's and nfdepth's TypeErrors."""
+    m = RigidMotion(translation=(1.0, 0.0, 0.0))
+    with pytest.raises(TypeError, match=r"unsupported operand type\(s\) for \+: 'RigidMotion' and 'int'"):
+        m + 5
+    with pytest.raises(TypeError, match=r"unsupported operand type\(s\) for -: 'RigidMotion' and 'str'"):
+        m - "a"
+    with pytest.raises(TypeError, match=r"^factor must be a finite number, got 'x'"):
+        m.scaled("x")
+    with pytest.raises(ValueError, match=r"^factor must be a finite number, got nan$"):
         m.scaled(float("nan"))

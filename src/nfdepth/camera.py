@@ -204,10 +204,14 @@ class RigidMotion:
         return cls(-as_vector3("velocity", velocity), np.zeros(3))
 
     def __add__(self, other: RigidMotion) -> RigidMotion:
+        if not isinstance(other, RigidMotion):
+            return NotImplemented  # Python's TypeError: unsupported operand type(s)
         return RigidMotion(self.translation + other.translation, self.rotation + other.rotation)
 
     def __sub__(self, other: RigidMotion) -> RigidMotion:
         """Relative motion ``(V_m - V_s, Omega_m - Omega_s)`` (paper eq. 2, 4)."""
+        if not isinstance(other, RigidMotion):
+            return NotImplemented
         return RigidMotion(self.translation - other.translation, self.rotation - other.rotation)
 
     def __neg__(self) -> RigidMotion:
@@ -215,6 +219,7 @@ class RigidMotion:
 
     def scaled(self, factor: float) -> RigidMotion:
         """Motion over ``factor`` units of time (or with velocities times ``factor``)."""
+        factor = check_finite("factor", factor)
         return RigidMotion(self.translation * factor, self.rotation * factor)
 
     @property
