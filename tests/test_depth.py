@@ -1,5 +1,7 @@
 """Depth solvers (paper eq. 4-6) round-trip analytic relative normal flow."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -193,3 +195,31 @@ def test_far_triples_count_only_within_the_differential_range(step):
     (single, _), (fused, z) = errors(1), errors(None)
     assert fused < 1.1 * single, (fused, single)
     assert z < 1.2
+
+
+def test_motions_beyond_the_stencils_range_warn():
+    """Edge points moving a median of more than 2 px across a triple: one warning naming the triple.
+
+    The stencil's measured normal flow saturates near 4 px (sigma 2), so the
+    motion is underestimated there and depths are wrong by tens of percent
+    (18 % at 4 px, 94 % at 8 px, tests/test_video_coarse_to_fine.py). 1 px
+    per step stays silent (the suite turns warnings into errors).
+    """
+    from nfdepth import synthetic
+    from nfdepth.pipelines import dynamic_stereo, static_stereo_edges
+
+    def row(step, n):
+        return synthetic.static_sequence(synthetic.paper_pyramid(), synthetic.paper_camera(), n_views=n, camera_step=(step, 0.0, 0.0), reference_index=n // 2)
+
+    slow, fast = row(4.0, 5), row(16.0, 5)
+    static_stereo_edges(slow.frames, camera=slow.camera, baseline=4.0)
+    with pytest.warns(UserWarning, match=r"^the edge points move a median of 3\.\d px across the nearest views \(its measured normal flow\), beyond the differential method's range of about 2 px"):
+        static_stereo_edges(fast.frames[1:4], camera=fast.camera, baseline=16.0)
+    # five frames of one moving camera as I1..I5: the moving triple (I1, I3, I5) spans two steps, the other
+    # one; the relative flow is then about zero, so its depths are no depths (ignored here)
+    motion = RigidMotion(translation=(-4.0, 0.0, 0.0))
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*behind the camera", category=UserWarning)
+        dynamic_stereo(row(1.0, 5).frames, camera=slow.camera, relative_motion=motion)
+        with pytest.warns(UserWarning, match=r"^the edge points move a median of \d\.\d px across the moving camera's frames \(I1, I3, I5\)"):
+            dynamic_stereo(row(6.0, 5).frames, camera=slow.camera, relative_motion=motion)  # 1.5 px per frame

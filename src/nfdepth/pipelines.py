@@ -190,6 +190,38 @@ def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str) -> None:
         )
 
 
+#: Median displacement (px) of the edge points across a triple above which the
+#: result warns: the three-frame stencil follows about 2 px (beyond, depth errors
+#: grow to tens of percent at 4 px; the measured flow itself saturates near 4 px).
+_MAX_MEDIAN_DISPLACEMENT_PX = 2.0
+#: Start of that warning (video.py aggregates it over the frames of a run).
+DISPLACEMENT_WARNING = "the edge points move a median of"
+
+
+def _warn_if_beyond_differential_range(mask, triples) -> None:
+    """Warn when the edge points (``mask``) move more than the stencil follows across a triple.
+
+    ``triples`` holds ``(name, normal flow map, time span of the triple)``;
+    the displacement is ``|Vn| * span`` (px).
+    """
+    worst = None
+    for name, flow, span in triples:
+        shift = np.abs(flow[mask]) * span
+        shift = shift[np.isfinite(shift)]
+        if shift.size >= _ORDER_CHECK_MIN_POINTS:
+            median = float(np.median(shift))
+            if median > _MAX_MEDIAN_DISPLACEMENT_PX and (worst is None or median > worst[1]):
+                worst = (name, median)
+    if worst is not None:
+        warnings.warn(
+            f"{DISPLACEMENT_WARNING} {worst[1]:.1f} px across the {worst[0]} (its measured normal flow), beyond the"
+            " differential method's range of about 2 px: depths are wrong by up to tens of percent (at 4 px); use frames"
+            " closer together or downsample the images (nfdepth video: leave --levels at its default)",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
 def _check_min_size(name: str, shape) -> None:
     if min(shape) < 3:
         msg = f"{name} must be at least 3x3 pixels, got shape {shape}"
@@ -299,7 +331,7 @@ def dynamic_stereo(
         moving.grad_t - stationary.grad_t,
     )
     edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
-    return _edge_result(
+    result = _edge_result(
         camera=camera,
         relative_motion=relative_motion,
         shared=shared,
@@ -313,6 +345,9 @@ def dynamic_stereo(
         max_rel_std=max_rel_std,
         order_hint="are the frames in time order I1..I5, and is relative_motion's sign right (V = -T for a camera moving by T)?",
     )
+    triples = [("moving camera's frames (I1, I3, I5)", vn_m, 2.0 * step), ("stationary camera's frames (I2, I3, I4)", vn_s, step)]
+    _warn_if_beyond_differential_range(result.selection.mask, triples)
+    return result
 
 
 #: Largest normal displacement (px) a triple of :func:`static_stereo_edges` measures
@@ -426,7 +461,7 @@ def static_stereo_edges(
         delta, fused_std, _ = fuse_inverse_depth(np.stack(used), 0.0, ones, np.stack(stds) if noise > 0 else ones)
         std = fused_std if noise > 0 else np.zeros_like(delta)
     edge_options = _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px)
-    return _edge_result(
+    result = _edge_result(
         camera=camera,
         relative_motion=relative_motion,
         shared=shared,
@@ -440,6 +475,8 @@ def static_stereo_edges(
         max_rel_std=max_rel_std,
         order_hint="are the views in the wrong order? The camera must move toward `direction` from the first view to the last",
     )
+    _warn_if_beyond_differential_range(result.selection.mask, [("nearest views", flows[0], 1.0)])
+    return result
 
 
 __all__ += ["Reason"]

@@ -84,7 +84,7 @@ from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import estimate_noise_std
-from .pipelines import _ORDER_CHECK_MIN_POINTS, EdgeDepth, static_stereo_edges
+from .pipelines import _MAX_MEDIAN_DISPLACEMENT_PX, _ORDER_CHECK_MIN_POINTS, DISPLACEMENT_WARNING, EdgeDepth, static_stereo_edges
 from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 from .stereo import auto_levels
 
@@ -624,6 +624,8 @@ def depth_from_video(
     rounded: list[int] = []  # static frames whose step is not zero but lost to rounding
     largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
+    fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
+    fastest = 0.0
     behind_points = determinable_points = 0
     triples = 0
     for n, frame in enumerate(frames):
@@ -666,6 +668,7 @@ def depth_from_video(
         if moves:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
+                warnings.filterwarnings("ignore", message=DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
                 edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std}
                 if levels == 1:
                     res = static_stereo_edges(window, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
@@ -680,6 +683,12 @@ def depth_from_video(
                         edge_step_px=edge_step_px,
                         **edge_options,
                     )
+            # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
+            shift = np.abs(res.flows["relative" if levels == 1 else "residual"][res.selection.mask])
+            shift = shift[np.isfinite(shift)]
+            if shift.size >= _ORDER_CHECK_MIN_POINTS and float(np.median(shift)) > _MAX_MEDIAN_DISPLACEMENT_PX:
+                fast_frames.append(k)
+                fastest = max(fastest, float(np.median(shift)))
             behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
             ahead = int(np.count_nonzero(res.inverse_depth.reason == Reason.OK))
             if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:
@@ -742,6 +751,19 @@ def depth_from_video(
         warnings.warn(
             f"the camera does not move around {len(static)} of {triples} frames ({_frame_list(static)}: the same position one frame"
             f" before and after): they have no measurement of their own and carry the fused depth of the frames before{rounding}",
+            UserWarning,
+            stacklevel=2,
+        )
+    if fast_frames:
+        advice = (
+            "leave levels (--levels) at its default: coarse to fine"
+            if levels == 1
+            else "the pyramid's prior failed there; use frames closer together or more pyramid levels"
+        )
+        warnings.warn(
+            f"in {len(fast_frames)} of {triples} frames ({_frame_list(fast_frames)}) the edge points move a median of up to"
+            f" {fastest:.1f} px per frame{'' if levels == 1 else ' after warping by the prior'}, beyond the differential"
+            f" method's range of about 2 px: their depths are wrong by up to tens of percent; {advice}",
             UserWarning,
             stacklevel=2,
         )
