@@ -128,18 +128,23 @@ def test_depths_beyond_float32_are_refused(scene):
         list(depth_from_video(list(scene.frames[:3]), camera=huge, velocity=np.asarray(STEP) * 1e30))
 
 
+def _write_avi(path, frames):
+    """``frames`` (grey, 200 x 200) as an MJPG video at ``path``; skips where OpenCV cannot write one."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (200, 200), True)
+    if not writer.isOpened():
+        pytest.skip("no MJPG writer in this OpenCV build")
+    for f in frames:
+        writer.write(cv2.cvtColor(np.clip(f, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    writer.release()
+    return path
+
+
 def test_read_video_sources(tmp_path, sequence_dir, scene):
     frames = list(read_video(sequence_dir))
     assert len(frames) == N_FRAMES and frames[0].dtype == np.float32
     np.testing.assert_allclose(frames[2] / 200, scene.frames[2], atol=0.01)
     assert len(read_video(str(sequence_dir / "f*.png"))) == N_FRAMES
-    avi = tmp_path / "v.avi"
-    writer = cv2.VideoWriter(str(avi), cv2.VideoWriter_fourcc(*"MJPG"), 10, (200, 200), True)
-    if not writer.isOpened():
-        pytest.skip("no MJPG writer in this OpenCV build")
-    for f in scene.frames[:4]:
-        writer.write(cv2.cvtColor(np.clip(f, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
-    writer.release()
+    avi = _write_avi(tmp_path / "v.avi", scene.frames[:4])
     got = list(read_video(avi))
     assert len(got) == 4 and got[0].shape == (200, 200) and got[0].dtype == np.float32
     assert np.median(np.abs(got[1] - scene.frames[1])) < 3
@@ -668,13 +673,7 @@ def test_video_cli_unopenable_file_is_one_line(tmp_path, capfd, rail_rig):
 
 def test_video_cli_short_video_file(tmp_path, capsys, scene):
     """A video file's frame count is only known once read: two frames are refused after reading, with nothing written."""
-    avi = tmp_path / "two.avi"
-    writer = cv2.VideoWriter(str(avi), cv2.VideoWriter_fourcc(*"MJPG"), 10, (200, 200), True)
-    if not writer.isOpened():
-        pytest.skip("no MJPG writer in this OpenCV build")
-    for f in scene.frames[:2]:
-        writer.write(cv2.cvtColor(np.clip(f, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
-    writer.release()
+    avi = _write_avi(tmp_path / "two.avi", scene.frames[:2])
     rig = tmp_path / "rig.toml"
     rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\nvelocity = [1.0, 0.0, 0.0]\n")
     for out in (tmp_path / "d.npz", tmp_path / "folder"):

@@ -651,9 +651,6 @@ def main(argv=None) -> int:
     from . import io
 
     io.COMPLETED_WRITES = []  # this run's outputs, removed if it is interrupted or fails
-    # FFmpeg's own log lines (a video OpenCV cannot open) would precede the one-line error;
-    # read when OpenCV opens its first video, so this holds for the run (a user's setting wins)
-    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     if threading.current_thread() is threading.main_thread():
         previous_sigterm = signal.signal(signal.SIGTERM, _on_sigterm)
     try:

@@ -68,6 +68,7 @@ relative to the reference one at the crossings (the same at every crossing),
 from __future__ import annotations
 
 import glob as _glob
+import os
 import re
 import warnings
 from collections.abc import Iterable, Iterator
@@ -87,6 +88,12 @@ from .normal_flow import estimate_noise_std
 from .pipelines import _MAX_MEDIAN_DISPLACEMENT_PX, _ORDER_CHECK_MIN_POINTS, DISPLACEMENT_WARNING, EdgeDepth, static_stereo_edges
 from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 from .stereo import auto_levels
+
+# FFmpeg logs a video it cannot open on stderr ("moov atom not found"), ahead of
+# nfdepth's own one-line error. OpenCV reads this once, when it opens its first
+# video in the process, so it is set when this module is imported, before any
+# read_video; a level the user set wins.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
 _UNITS_HINT = "give the rig's focal length and camera positions or speed in units that keep depths in that range"
 
@@ -182,6 +189,10 @@ def read_video(path) -> FrameSource:
     -------
     FrameSource
         Iterable of ``(H, W)`` float32 frames, with ``len()``.
+
+    FFmpeg's own log lines about a file it cannot decode are silenced
+    (``OPENCV_FFMPEG_LOGLEVEL=-8``, set when this module is imported unless
+    already set): the error is nfdepth's one line.
 
     Raises
     ------
