@@ -195,7 +195,14 @@ def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str) -> None:
 #: grow to tens of percent at 4 px; the measured flow itself saturates near 4 px).
 _MAX_MEDIAN_DISPLACEMENT_PX = 2.0
 #: Start of that warning (video.py aggregates it over the frames of a run).
-DISPLACEMENT_WARNING = "the edge points move a median of"
+_DISPLACEMENT_WARNING = "the edge points move a median of"
+
+
+def _median_displacement(mask, flow, span: float = 1.0) -> float:
+    """Median ``|Vn| * span`` (px) over the edge points ``mask`` of a normal-flow map; 0 below 10 points."""
+    shift = np.abs(flow[mask]) * span
+    shift = shift[np.isfinite(shift)]
+    return float(np.median(shift)) if shift.size >= _ORDER_CHECK_MIN_POINTS else 0.0
 
 
 def _warn_if_beyond_differential_range(mask, triples) -> None:
@@ -206,15 +213,12 @@ def _warn_if_beyond_differential_range(mask, triples) -> None:
     """
     worst = None
     for name, flow, span in triples:
-        shift = np.abs(flow[mask]) * span
-        shift = shift[np.isfinite(shift)]
-        if shift.size >= _ORDER_CHECK_MIN_POINTS:
-            median = float(np.median(shift))
-            if median > _MAX_MEDIAN_DISPLACEMENT_PX and (worst is None or median > worst[1]):
-                worst = (name, median)
+        median = _median_displacement(mask, flow, span)
+        if median > _MAX_MEDIAN_DISPLACEMENT_PX and (worst is None or median > worst[1]):
+            worst = (name, median)
     if worst is not None:
         warnings.warn(
-            f"{DISPLACEMENT_WARNING} {worst[1]:.1f} px across the {worst[0]} (its measured normal flow), beyond the"
+            f"{_DISPLACEMENT_WARNING} {worst[1]:.1f} px across the {worst[0]} (its measured normal flow), beyond the"
             " differential method's range of about 2 px: depths are wrong by up to tens of percent (at 4 px); use frames"
             " closer together or downsample the images (nfdepth video: leave --levels at its default)",
             UserWarning,

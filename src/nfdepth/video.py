@@ -85,7 +85,14 @@ from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import estimate_noise_std
-from .pipelines import _MAX_MEDIAN_DISPLACEMENT_PX, _ORDER_CHECK_MIN_POINTS, DISPLACEMENT_WARNING, EdgeDepth, static_stereo_edges
+from .pipelines import (
+    _MAX_MEDIAN_DISPLACEMENT_PX,
+    _ORDER_CHECK_MIN_POINTS,
+    _DISPLACEMENT_WARNING,
+    EdgeDepth,
+    _median_displacement,
+    static_stereo_edges,
+)
 from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 from .stereo import auto_levels
 
@@ -431,6 +438,7 @@ def _check_levels(levels, shape) -> int:
         raise ValueError(msg)
     return levels
 
+
 #: What a camera without motion is told (no baseline, no depth).
 _MOVE_HINT = "expected camera positions that change from frame to frame (depth needs a baseline between frames)"
 
@@ -598,7 +606,11 @@ def depth_from_video(
         Once per run, at its end: when some triples do not move (how many,
         which frames), and when in some triples most edge points come out
         behind the camera (the camera moves opposite to its given positions:
-        a sign or ordering mistake in the poses / velocity / positions).
+        a sign or ordering mistake in the poses / velocity / positions), and
+        when in some triples the edge points move a median of more than 2 px
+        per frame across the stencil (with ``levels=1``, or where the
+        pyramid's prior failed): their depths are wrong by up to tens of
+        percent.
     """
     spec = _positions_from(rig, velocity, positions)
     cam = camera if camera is not None else (rig.camera if rig is not None else None)
@@ -679,7 +691,7 @@ def depth_from_video(
         if moves:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
-                warnings.filterwarnings("ignore", message=DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
+                warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
                 edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std}
                 if levels == 1:
                     res = static_stereo_edges(window, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
@@ -695,11 +707,10 @@ def depth_from_video(
                         **edge_options,
                     )
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
-            shift = np.abs(res.flows["relative" if levels == 1 else "residual"][res.selection.mask])
-            shift = shift[np.isfinite(shift)]
-            if shift.size >= _ORDER_CHECK_MIN_POINTS and float(np.median(shift)) > _MAX_MEDIAN_DISPLACEMENT_PX:
+            shift = _median_displacement(res.selection.mask, res.flows["relative" if levels == 1 else "residual"])
+            if shift > _MAX_MEDIAN_DISPLACEMENT_PX:
                 fast_frames.append(k)
-                fastest = max(fastest, float(np.median(shift)))
+                fastest = max(fastest, shift)
             behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
             ahead = int(np.count_nonzero(res.inverse_depth.reason == Reason.OK))
             if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:
