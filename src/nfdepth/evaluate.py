@@ -393,6 +393,7 @@ def select_views(n_views: int, reference: int, views="all") -> list:
     all of them. A sequence of whole numbers is returned as a list of ints
     (their range is checked later by :func:`nfdepth.datasets.view_subset`).
     """
+    msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
     if isinstance(views, str):
         key = views.strip().lower()
         if key == "all":
@@ -405,9 +406,7 @@ def select_views(n_views: int, reference: int, views="all") -> list:
             if reference == 0:
                 return [0, 1, 2]
             return [reference - 2, reference - 1, reference]
-        msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
         raise ValueError(msg)
-    msg = f"views must be 'all', 'three' or a sequence of view indices, got {views!r}"
     try:
         values = [float(i) for i in views]
     except (TypeError, ValueError):

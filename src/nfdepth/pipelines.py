@@ -108,6 +108,7 @@ class EdgeDepth:
 
 
 def _noise_level(noise_std, frames) -> float:
+    """The image noise std: ``noise_std`` checked, else the median of the frames' estimates."""
     if noise_std is None:
         return float(np.median([estimate_noise_std(f) for f in frames]))
     return check_noise_std("noise_std", noise_std)
@@ -190,10 +191,12 @@ def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str) -> None:
         )
 
 
-#: Median displacement (px) of the edge points across a triple above which the
-#: result warns: the three-frame stencil follows about 2 px (beyond, depth errors
-#: grow to tens of percent at 4 px; the measured flow itself saturates near 4 px).
-_MAX_MEDIAN_DISPLACEMENT_PX = 2.0
+#: The differential method's range: the three-frame stencil follows a point's
+#: displacement across a triple up to about 2 px (beyond, depth errors grow to tens
+#: of percent at 4 px; the measured flow itself saturates near 4 px). A median
+#: displacement of the edge points above it warns; the video pipeline bounds the
+#: motion it leaves after warping by it.
+_DIFFERENTIAL_RANGE_PX = 2.0
 #: Start of that warning (video.py aggregates it over the frames of a run).
 _DISPLACEMENT_WARNING = "the edge points move a median of"
 
@@ -214,7 +217,7 @@ def _warn_if_beyond_differential_range(mask, triples) -> None:
     worst = None
     for name, flow, span in triples:
         median = _median_displacement(mask, flow, span)
-        if median > _MAX_MEDIAN_DISPLACEMENT_PX and (worst is None or median > worst[1]):
+        if median > _DIFFERENTIAL_RANGE_PX and (worst is None or median > worst[1]):
             worst = (name, median)
     if worst is not None:
         warnings.warn(

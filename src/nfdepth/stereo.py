@@ -268,10 +268,11 @@ from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_noise_std, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_message, select_edge_points
-from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, estimate_noise_std, gaussian_smooth
+from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, gaussian_smooth
+from .pipelines import _noise_level
 
 __all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background", "check_depth_scale"]
 
@@ -1712,7 +1713,7 @@ def static_stereo(
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
     levels = 1 if search_range is not None else levels
-    noise = float(np.median([estimate_noise_std(v) for v in views])) if noise_std is None else check_noise_std("noise_std", noise_std)
+    noise = _noise_level(noise_std, views)
     p1, p99 = percentiles(views[ref], [1, 99])
     spread = float(p99 - p1)
     noise_floor = max(noise, 1e-3 * spread, 1e-6)

@@ -86,7 +86,7 @@ from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import estimate_noise_std
 from .pipelines import (
-    _MAX_MEDIAN_DISPLACEMENT_PX,
+    _DIFFERENTIAL_RANGE_PX,
     _ORDER_CHECK_MIN_POINTS,
     _DISPLACEMENT_WARNING,
     EdgeDepth,
@@ -420,7 +420,6 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
 #: not move: such a step is rounding noise of equal positions (each position carries
 #: up to half an ulp, their difference up to about one).
 _ROUNDING_ULPS = 4
-_MAX_RESIDUAL_PX = 2.0  # the differential method's range of motion per frame
 _MIN_LEVEL_SIZE_PX = 8  # the coarsest level of a given ``levels`` keeps this many px on its smaller side
 
 
@@ -628,10 +627,10 @@ def depth_from_video(
     levels = _check_levels(levels, cam.shape)
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)
-    if max_residual_px > _MAX_RESIDUAL_PX:
+    if max_residual_px > _DIFFERENTIAL_RANGE_PX:
         msg = (
             f"max_residual_px = {max_residual_px:g} px is beyond the differential method's range: expected at most"
-            f" {_MAX_RESIDUAL_PX:g} px of motion per frame left after warping (default 1)"
+            f" {_DIFFERENTIAL_RANGE_PX:g} px of motion per frame left after warping (default 1)"
         )
         raise ValueError(msg)
 
@@ -708,7 +707,7 @@ def depth_from_video(
                     )
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
             shift = _median_displacement(res.selection.mask, res.flows["relative" if levels == 1 else "residual"])
-            if shift > _MAX_MEDIAN_DISPLACEMENT_PX:
+            if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
             behind = int(np.count_nonzero(res.inverse_depth.reason == Reason.NOT_POSITIVE))
