@@ -15,8 +15,20 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import settings
+
+from nfdepth import datasets
 
 settings.register_profile("repeatable", derandomize=True, database=None, print_blob=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
+
+
+@pytest.fixture(scope="session")
+def tsukuba():
+    """The Tsukuba row (five views, truth at the third); skipped where the real data is absent."""
+    try:
+        return datasets.load_scene("tsukuba", datasets.data_root())
+    except datasets.DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")

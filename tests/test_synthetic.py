@@ -393,3 +393,24 @@ def test_points_sequences_and_types_refused():
         static_sequence(paper_pyramid(), paper_camera(), n_views=3, reference_index=3)
     scene = static_sequence(paper_pyramid(), paper_camera(image_size_px=40), n_views=3, reference_index=2)
     assert scene.reference_index == 2
+
+
+def test_video_sequence_of_a_turning_camera():
+    """Frame k is the render at t = k - reference; poses follow the motion; depth_at is the render's depth."""
+    from nfdepth.synthetic import video_sequence
+
+    motion = CameraMotion(position=(5.0, 0.0, 0.0), velocity_per_t=(2.0, 0.0, 1.0), rotation_rad_per_t=(0.0, 0.02, 0.01))
+    cam = paper_camera(image_size_px=40)
+    scene = video_sequence(paper_pyramid(), cam, camera_motion=motion, n_frames=4)
+    np.testing.assert_array_equal(scene.times, [-2.0, -1.0, 0.0, 1.0])
+    np.testing.assert_allclose(scene.positions, [[1.0, 0, -2.0], [3.0, 0, -1.0], [5.0, 0, 0], [7.0, 0, 1.0]])
+    np.testing.assert_allclose(scene.orientations_rad, [[0, -0.04, -0.02], [0, -0.02, -0.01], [0, 0, 0], [0, 0.02, 0.01]])
+    for k, t in enumerate(scene.times):
+        rendering = render(paper_pyramid(), cam, camera_motion=motion, time=t)
+        np.testing.assert_array_equal(scene.frames[k], rendering.image)
+        rows, cols = np.mgrid[0:40, 0:40]
+        np.testing.assert_allclose(scene.depth_at(k, rows, cols), rendering.depth)
+    with pytest.raises(TypeError, match="camera_motion must be a CameraMotion, got NoneType"):
+        video_sequence(paper_pyramid(), cam, camera_motion=None)
+    with pytest.raises(ValueError, match="reference_index must be in 0..3, got 4"):
+        video_sequence(paper_pyramid(), cam, camera_motion=motion, n_frames=4, reference_index=4)

@@ -99,13 +99,6 @@ def test_positions_equal_velocity(scene):
     np.testing.assert_array_equal(a[-1].inverse_depth, b[-1].inverse_depth)
 
 
-def test_rotating_poses_rejected(tmp_path, scene):
-    (tmp_path / "p.csv").write_text("frame,x,y,z,rx,ry,rz\n0,0,0,0,0,0,0\n1,1,0,0,0,0,0\n2,2,0,0,0,0,5\n")
-    (tmp_path / "r.toml").write_text('[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\nposes = "p.csv"\n')
-    with pytest.raises(RigError, match="translates without rotating"):
-        list(depth_from_video(list(scene.frames[:3]), rig=load_rig(tmp_path / "r.toml")))
-
-
 def test_library_argument_errors(scene):
     with pytest.raises(TypeError, match="exactly one of rig, velocity, positions"):
         next(depth_from_video(scene.frames, camera=scene.camera))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import nfdepth.cli
-from nfdepth import datasets, synthetic
+from nfdepth import synthetic
 from nfdepth._translating_pyramid import dense_prior, flow_directions
 from nfdepth.camera import PinholeCamera, RigidMotion, image_flow_px
 from nfdepth.cli import main
@@ -157,14 +157,6 @@ def test_option_errors(options, exc, message):
     scene = _sequence((1.0, 0.0, 0.0))
     with pytest.raises(exc, match=message):
         next(depth_from_video(list(scene.frames), camera=scene.camera, velocity=(1.0, 0.0, 0.0), **options))
-
-
-@pytest.fixture(scope="module")
-def tsukuba():
-    try:
-        return datasets.load_scene("tsukuba", datasets.data_root())
-    except datasets.DataNotFoundError:
-        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
 
 
 def test_tsukuba_row_as_a_video(tsukuba):

@@ -397,7 +397,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_dynamic)
 
-    p = sub.add_parser("video", help="depth per frame of a camera translating through a static scene, fused over time")
+    p = sub.add_parser("video", help="depth per frame of a camera moving (and turning) through a static scene, fused over time")
     p.add_argument("source", metavar="VIDEO", help="a video file, a folder of images, or a glob such as 'frames/*.png'")
     p.add_argument("--rig", required=True, metavar="TOML", help="rig file with [camera] and [video] (docs/rig-format.md)")
     p.add_argument("--out", required=True, metavar="OUT", help="OUT.npz (all frames, written at the end) or a folder (depth_NNNNNN.tif per frame)")

@@ -386,7 +386,7 @@ class StereoSpec:
 
 @dataclass(frozen=True, eq=False)
 class VideoSpec:
-    """``[video]``: one camera translating through a static scene.
+    """``[video]``: one camera moving through a static scene.
 
     Exactly one of the three is set.
 
@@ -398,11 +398,15 @@ class VideoSpec:
         Camera optical centre of each frame (world = camera axes).
     poses : Poses or None
         Loaded from a CSV (path relative to the rig file's folder).
+    orientations_deg : ndarray (N, 3) or None
+        With ``positions``: the camera-to-world orientation of each frame as
+        a rotation vector in degrees (default: constant, the world axes).
     """
 
     velocity: np.ndarray | None = None
     positions: np.ndarray | None = None
     poses: Poses | None = None
+    orientations_deg: np.ndarray | None = None
 
     def camera_position(self, frame: int) -> np.ndarray:
         """Optical centre of ``frame`` in world coordinates (frame 0 at the origin for ``velocity``)."""
@@ -416,9 +420,11 @@ class VideoSpec:
         return self.poses.position(frame)
 
     def orientation_deg(self, frame: int) -> np.ndarray:
-        """Camera-to-world rotation vector (degrees) of ``frame``; zeros unless poses give it."""
+        """Camera-to-world rotation vector (degrees) of ``frame``; zeros unless poses or ``orientations_deg`` give it."""
         if self.poses is not None:
             return self.poses.rotation(frame)
+        if self.orientations_deg is not None:
+            return self.orientations_deg[frame]
         return np.zeros(3)
 
     def __eq__(self, other) -> bool:
@@ -429,8 +435,13 @@ class VideoSpec:
             isinstance(other, VideoSpec)
             and same(self.velocity, other.velocity)
             and same(self.positions, other.positions)
+            and same(self.orientations_deg, other.orientations_deg)
             and ((self.poses is None) == (other.poses is None))
-            and (self.poses is None or (np.array_equal(self.poses.positions, other.poses.positions) and np.array_equal(self.poses.frames, other.poses.frames)))
+            and (self.poses is None or (
+                np.array_equal(self.poses.positions, other.poses.positions)
+                and np.array_equal(self.poses.frames, other.poses.frames)
+                and np.array_equal(self.poses.rotations_deg, other.poses.rotations_deg)
+            ))
         )
 
 

@@ -49,6 +49,7 @@ __all__ = [
     "PaperExperiment",
     "Rendering",
     "StaticScene",
+    "VideoScene",
     "dynamic_sequence",
     "paper_camera",
     "paper_dynamic_sequence",
@@ -60,6 +61,7 @@ __all__ = [
     "render",
     "static_sequence",
     "surface_depth_at",
+    "video_sequence",
 ]
 
 #: Background intensity of the paper's synthetic images.
@@ -950,6 +952,100 @@ def static_sequence(
         camera=camera,
         camera_positions=times[:, None] * step,
         relative_motion=RigidMotion.camera_translation(step),
+        polyhedron=polyhedron,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class VideoScene:
+    """A video of a still object from one camera in motion (translating and turning).
+
+    Attributes
+    ----------
+    frames : ndarray, shape (n_frames, H, W)
+        Frame ``k`` taken at ``times[k]``.
+    times : ndarray, shape (n_frames,)
+        ``k - reference_index``.
+    camera : PinholeCamera
+    camera_motion : CameraMotion
+    positions : ndarray, shape (n_frames, 3)
+        Optical centre of every frame (world units).
+    orientations_rad : ndarray, shape (n_frames, 3)
+        Camera-to-world orientation of every frame as a rotation vector
+        (``times[k] * camera_motion.rotation_rad_per_t``), as
+        :func:`nfdepth.video.depth_from_video` takes it.
+    polyhedron : ConvexPolyhedron
+    """
+
+    frames: np.ndarray
+    times: np.ndarray
+    camera: PinholeCamera
+    camera_motion: CameraMotion
+    positions: np.ndarray
+    orientations_rad: np.ndarray
+    polyhedron: ConvexPolyhedron
+
+    def depth_at(self, frame: int, rows, cols) -> np.ndarray:
+        """True depth at sub-pixel positions of frame ``frame``."""
+        t = float(self.times[check_int("frame", frame, 0)])
+        return surface_depth_at(self.polyhedron, self.camera, rows, cols, camera_motion=self.camera_motion, time=t)
+
+
+def video_sequence(
+    polyhedron,
+    camera,
+    *,
+    camera_motion,
+    n_frames=5,
+    reference_index=None,
+    background=BACKGROUND_INTENSITY,
+    noise_std=0.0,
+    rng=None,
+    dtype=np.float64,
+) -> VideoScene:
+    """Render a video of a still object from a camera moving as ``camera_motion`` says.
+
+    Frame ``k`` is taken at time ``k - reference_index`` (default: the
+    middle frame at ``t = 0``), one unit of time per frame.
+
+    Parameters
+    ----------
+    polyhedron : ConvexPolyhedron
+    camera : PinholeCamera
+    camera_motion : CameraMotion
+        Position and orientation over time (per frame).
+    n_frames : int
+        Number of frames (>= 1).
+    reference_index : int, optional
+        The frame taken at ``t = 0``; default ``n_frames // 2``.
+    background, noise_std, rng, dtype
+        As in :func:`render`.
+
+    Returns
+    -------
+    VideoScene
+    """
+    _check_type("polyhedron", polyhedron, ConvexPolyhedron, allow_none=False)
+    _check_camera(camera)
+    motion = _check_type("camera_motion", camera_motion, CameraMotion, allow_none=False)
+    n = check_int("n_frames", n_frames, 1)
+    ref = n // 2 if reference_index is None else check_int("reference_index", reference_index, 0)
+    if ref >= n:
+        msg = f"reference_index must be in 0..{n - 1}, got {ref}"
+        raise ValueError(msg)
+    _check_noise(noise_std, rng)
+    times = np.arange(n, dtype=float) - ref
+    frames = [
+        render(polyhedron, camera, camera_motion=motion, time=t, background=background, noise_std=noise_std, rng=rng, dtype=dtype).image
+        for t in times
+    ]
+    return VideoScene(
+        frames=np.stack(frames),
+        times=times,
+        camera=camera,
+        camera_motion=motion,
+        positions=np.array([motion.position_at(t) for t in times]),
+        orientations_rad=times[:, None] * motion.rotation_rad_per_t,
         polyhedron=polyhedron,
     )
 

@@ -1,13 +1,20 @@
-"""Depth from a single camera translating through a static scene (video).
+"""Depth from a single camera moving through a static scene (video).
 
 Each triple of successive frames ``(k-1, k, k+1)`` is static stereo (paper
 section 2.3): the stationary partner's normal flow is zero, so the relative
 normal flow is the sequence's own, with relative motion ``dV = -T`` where
-``T = (P_k+1 - P_k-1) / 2`` is the camera's translation per frame (central
-difference of the known positions, in the camera frame). Inverse depth and
-its standard deviation come from :func:`nfdepth.pipelines.static_stereo_edges`
-at the strong zero-crossing edge points of frame ``k`` (paper eq. 4, general
+``T = R_k^T (P_k+1 - P_k-1) / 2`` is the camera's translation per frame
+(central difference of the known positions, in frame ``k``'s camera axes;
+``R_k`` is its camera-to-world orientation). Inverse depth and its standard
+deviation come from :func:`nfdepth.pipelines.static_stereo_edges` at the
+strong zero-crossing edge points of frame ``k`` (paper eq. 4, general
 translation direction, so forward motion works as well as lateral).
+
+A camera that also turns (poses whose orientation changes) has its outer
+frames turned to frame ``k``'s orientation first (:mod:`nfdepth._derotation`,
+the homography ``K R_j^T R_k K^-1``): eq. 4's rotational term ``A`` removed
+exactly, at any rotation, instead of to first order. Edge points where a
+turned frame has nothing to read (it looked elsewhere) are ``NO_DATA``.
 
 Temporal fusion (a per-pixel Kalman filter on inverse depth)
 -------------------------------------------------------------
@@ -17,7 +24,8 @@ the frame: map pixel ``[i, j]`` holds the estimate at the cell centre
 ``k``:
 
 1. *Predict*: every state point is back-projected with its depth, moved by
-   the camera's displacement ``-(P_k - P_k-1)`` and re-projected
+   the camera's displacement ``-(P_k - P_k-1)``, turned by its rotation
+   ``R_k-1^T R_k`` if it turned, and re-projected
    (:meth:`PinholeCamera.project`); its inverse depth becomes ``1/Z'`` and
    its std scales by ``(Z/Z')**2``. Where two points land on one pixel the
    nearer wins. Process noise inflates the variance:
@@ -79,6 +87,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ._derotation import derotate, derotation_maps, measurable
 from ._translating_pyramid import edge_depth_coarse_to_fine
 from ._validate import UNIT_SCALE_RANGE, as_image, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
@@ -91,6 +100,7 @@ from .pipelines import (
     _DISPLACEMENT_WARNING,
     EdgeDepth,
     _median_displacement,
+    _noise_level,
     static_stereo_edges,
 )
 from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
@@ -295,14 +305,21 @@ class _State:
         self.count = np.zeros(shape, dtype=np.int32)
 
 
-def _predict(state: _State, camera: PinholeCamera, displacement_cam: np.ndarray, process_noise: float) -> _State:
-    """Move the state to the next frame: reproject with depth, inflate variance."""
+def _predict(state: _State, camera: PinholeCamera, displacement_cam: np.ndarray, process_noise: float, *, rotation=None) -> _State:
+    """Move the state to the next frame: reproject with depth, inflate variance.
+
+    ``displacement_cam`` is the camera's move in the previous frame's axes,
+    ``rotation`` (3 x 3, default none) the new frame's axes in the previous
+    one's (``R_prev^T R_new`` of camera-to-world rotations).
+    """
     out = _State(state.rho.shape)
     ii, jj = np.nonzero(np.isfinite(state.rho))
     if ii.size == 0:
         return out
     rho = state.rho[ii, jj]
     pts = camera.back_project(ii + 0.5, jj + 0.5, 1.0 / rho) - displacement_cam
+    if rotation is not None:
+        pts = pts @ np.asarray(rotation)  # rows of R^T (P - d)
     r, c, z = camera.project(pts)
     ti = np.floor(r).astype(np.int64)
     tj = np.floor(c).astype(np.int64)
@@ -382,7 +399,10 @@ def _update(prior: _State, rho_m: np.ndarray, var_m: np.ndarray, *, gate: float,
 # ------------------------------------------------------------------ the pipeline
 
 
-def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
+def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None) -> VideoSpec:
+    if orientations_rad is not None and positions is None:
+        msg = "orientations_rad needs positions (one orientation per position); a rig's poses CSV gives both"
+        raise ValueError(msg)
     given = [n for n, v in (("rig", rig), ("velocity", velocity), ("positions", positions)) if v is not None]
     if len(given) != 1:
         msg = f"give exactly one of rig, velocity, positions (camera motion per frame); got {', '.join(given) or 'none'}"
@@ -412,7 +432,16 @@ def _positions_from(rig: Rig | None, velocity, positions) -> VideoSpec:
         raise ValueError(msg)
     _refuse_static(p, "positions", ValueError)
     _check_steps(p, "positions", error=ValueError)
-    return VideoSpec(positions=p)
+    if orientations_rad is None:
+        return VideoSpec(positions=p)
+    o = np.asarray(orientations_rad, dtype=float)
+    if o.shape != p.shape or not np.all(np.isfinite(o)):
+        msg = (
+            f"orientations_rad must have the shape of positions, {p.shape}, with finite values (one camera-to-world rotation"
+            f" vector per frame, radians), got shape {o.shape}"
+        )
+        raise ValueError(msg)
+    return VideoSpec(positions=p, orientations_deg=np.rad2deg(o))
 
 
 #: A triple whose step (half the distance between the positions one frame before and
@@ -499,14 +528,27 @@ def _refuse_static(p, what: str, error) -> None:
         raise error(f"{what}: the camera does not move: all {len(p)} positions are {_vec(p[0])}; {_MOVE_HINT}")
 
 
-def _camera_rotation(spec: VideoSpec, frame: int, reference) -> np.ndarray:
-    rot = spec.orientation_deg(frame)
-    if reference is not None and not np.allclose(rot, reference, atol=1e-6):
-        raise RigError(
-            f"poses: frame {frame} has orientation {rot.tolist()} deg, frame 0 of the run {np.asarray(reference).tolist()} deg:"
-            " video needs a camera that translates without rotating"
-        )
-    return rot
+def _camera_rotation(spec: VideoSpec, frame: int) -> np.ndarray:
+    """Camera-to-world rotation matrix of ``frame`` (identity unless poses give an orientation)."""
+    return Rotation.from_rotvec(np.deg2rad(spec.orientation_deg(frame))).as_matrix()
+
+
+def _void_outside(res: EdgeDepth, whole: np.ndarray) -> None:
+    """Edge points of ``res`` outside ``whole`` (a turned outer frame had nothing to read there) become ``NO_DATA``."""
+    inv = res.inverse_depth
+    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, whole.shape[0] - 1)
+    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, whole.shape[1] - 1)
+    void = ~whole[ii, jj]
+    inv.reason[void] = Reason.NO_DATA
+    inv.rho[void] = np.nan
+    inv.rho_std[void] = np.nan
+
+
+def _turned_triple(window: list[np.ndarray], cam: PinholeCamera, rotations, *, sigma_px: float):
+    """The outer frames turned to the middle one's orientation (:mod:`nfdepth._derotation`), and where a measurement is whole."""
+    maps = [derotation_maps(cam, rotations[j].T @ rotations[1]) for j in (0, 2)]
+    triple = [derotate(window[0], maps[0]), window[1], derotate(window[2], maps[1])]
+    return triple, measurable(maps[0][2] & maps[1][2], sigma_px=sigma_px)
 
 
 def depth_from_video(
@@ -516,6 +558,7 @@ def depth_from_video(
     camera: PinholeCamera | None = None,
     velocity=None,
     positions=None,
+    orientations_rad=None,
     first_frame: int = 0,
     sigma_px: float = 2.0,
     process_noise: float = 0.01,
@@ -529,7 +572,7 @@ def depth_from_video(
     max_residual_px: float = 1.0,
     edge_step_px: float = 1.0,
 ) -> Iterator[VideoDepthFrame]:
-    """Depth per frame of a camera translating through a static scene, fused over time.
+    """Depth per frame of a camera moving (translating, and turning if its poses say so) through a static scene, fused over time.
 
     Parameters
     ----------
@@ -543,8 +586,15 @@ def depth_from_video(
     velocity : 3 floats, optional
         Camera translation per frame (scene units, camera axes).
     positions : array_like, shape (N, 3), optional
-        Camera optical centre of every frame (world axes = camera axes, or
-        rotated by a constant orientation from a poses CSV).
+        Camera optical centre of every frame (world axes: the camera axes
+        unless ``orientations_rad`` or a rig's poses CSV give its
+        orientation).
+    orientations_rad : array_like, shape (N, 3), optional
+        With ``positions``: the camera-to-world orientation of every frame
+        as a rotation vector (radians; a poses CSV gives it in degrees).
+        A camera that turns has the outer frames of each triple turned to
+        the middle frame's orientation before the measurement (module
+        docstring). Default: it does not turn.
     first_frame : int
         Index of the first element of ``frames`` in the positions / poses.
     sigma_px : float
@@ -583,6 +633,7 @@ def depth_from_video(
     VideoDepthFrame
         One per frame that has a neighbour on each side (frames
         ``1 .. N-2``), each yielded once the following frame has arrived.
+        Maps are in the camera's image at that frame (its own orientation).
         A triple in which the camera does not move (the positions one frame
         before and after coincide) gives no measurement; the state is
         carried over (predicted) instead. Frames before the first triple
@@ -592,8 +643,9 @@ def depth_from_video(
     Raises
     ------
     RigError, ValueError
-        Size mismatch with the rig's camera, no motion given, rotating
-        poses, positions / poses that never change, a velocity or a step
+        Size mismatch with the rig's camera, no motion given,
+        ``orientations_rad`` without ``positions`` or of another shape,
+        positions / poses that never change, a velocity or a step
         between positions outside 1e-30..1e30 per frame (the rig's speed
         range), or (at the end of the frames) no triple in which the camera
         moves. A step of at most 4 float64 ulps of the positions' largest
@@ -611,7 +663,7 @@ def depth_from_video(
         pyramid's prior failed): their depths are wrong by up to tens of
         percent.
     """
-    spec = _positions_from(rig, velocity, positions)
+    spec = _positions_from(rig, velocity, positions, orientations_rad)
     cam = camera if camera is not None else (rig.camera if rig is not None else None)
     if not isinstance(cam, PinholeCamera):
         msg = "depth_from_video needs a camera: pass rig=... or camera=PinholeCamera(...)"
@@ -638,8 +690,7 @@ def depth_from_video(
     lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
     state: _State | None = None
-    prev_pos = None
-    rot0 = None
+    prev_pos = prev_orientation = prev_rotation = None
     moved = False
     held: list[tuple[int, np.ndarray, float]] = []  # static frames before the first one that moves
     static: list[int] = []
@@ -664,11 +715,11 @@ def depth_from_video(
             window.pop(0)
         k = first + n - 1
         triples += 1
-        if rot0 is None:
-            rot0 = _camera_rotation(spec, k - 1, None)
-        rmat = Rotation.from_rotvec(np.deg2rad(_camera_rotation(spec, k, rot0))).as_matrix()
         p_prev, p_mid, p_next = (_position(spec, i, motion_name, rig) for i in (k - 1, k, k + 1))
-        _camera_rotation(spec, k + 1, rot0)
+        orientations = [spec.orientation_deg(i) for i in (k - 1, k, k + 1)]
+        turns = not all(np.array_equal(o, orientations[1]) for o in orientations)
+        rotations = [_camera_rotation(spec, i) for i in (k - 1, k, k + 1)]
+        rmat = rotations[1]
         step_cam = rmat.T @ ((p_next - p_prev) / 2.0)  # world -> camera axes
         baseline = float(np.linalg.norm(step_cam))
         # no baseline: zero, or a step lost to float64 rounding of the positions (a few ulps of their largest coordinate)
@@ -691,12 +742,15 @@ def depth_from_video(
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
                 warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
-                edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std}
+                # the noise of the frames as taken (turning or warping resamples the outer ones and hides part of it)
+                edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": _noise_level(noise_std, window)}
+                # a turning camera's outer frames are first turned to the middle one's orientation: a translating triple
+                triple, whole = _turned_triple(window, cam, rotations, sigma_px=sigma_px) if turns else (window, None)
                 if levels == 1:
-                    res = static_stereo_edges(window, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
+                    res = static_stereo_edges(triple, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
                 else:
                     res = edge_depth_coarse_to_fine(
-                        window,
+                        triple,
                         camera=cam,
                         baseline=baseline,
                         direction=step_cam / baseline,
@@ -705,8 +759,12 @@ def depth_from_video(
                         edge_step_px=edge_step_px,
                         **edge_options,
                     )
+            mask = res.selection.mask
+            if whole is not None:
+                _void_outside(res, whole)
+                mask = mask & whole[: mask.shape[0], : mask.shape[1]]
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
-            shift = _median_displacement(res.selection.mask, res.flows["relative" if levels == 1 else "residual"])
+            shift = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
             if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
@@ -734,10 +792,12 @@ def depth_from_video(
         if state is None:
             state = _State(shape)
         else:
-            disp = rmat.T @ (p_mid - prev_pos)
-            state = _predict(state, cam, disp, process_noise)
+            if np.array_equal(prev_orientation, orientations[1]):
+                state = _predict(state, cam, rmat.T @ (p_mid - prev_pos), process_noise)
+            else:  # the camera turned since the previous frame
+                state = _predict(state, cam, prev_rotation.T @ (p_mid - prev_pos), process_noise, rotation=prev_rotation.T @ rmat)
         state = _update(state, rho_m, var_m, gate=gate, max_age=max_age)
-        prev_pos = p_mid
+        prev_pos, prev_orientation, prev_rotation = p_mid, orientations[1], rmat
         if not moves and not moved:
             held.append((k, np.asarray(p_mid, dtype=float).copy(), baseline))  # empty so far: no state yet
             continue
