@@ -44,19 +44,21 @@ def _map_errors(rho, motion, time):
 @pytest.mark.parametrize(
     ("step", "turn_deg", "single_max", "fused_max"),
     [
-        ((2.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.02, 0.013),  # measured seed 1: single triples 1.36 %, fused 0.79 %
-        ((2.0, 0.0, 0.0), (0.0, 5.0, 0.0), 0.02, 0.015),  # 8.7 px per frame of rotational flow: 1.29 %, 0.98 %
-        ((0.0, 0.0, 8.0), (0.0, 2.0, 0.0), 0.007, 0.006),  # forward: 0.42 %, 0.41 %
-        ((0.5, 1.0, 1.5), (0.5, 0.5, 0.5), 0.032, 0.02),  # paper experiment 4's motion, for the camera: 2.20 %, 1.27 %
+        ((2.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.015, 0.009),  # measured seed 1: single triples 1.03 %, fused 0.61 %
+        ((2.0, 0.0, 0.0), (0.0, 5.0, 0.0), 0.015, 0.009),  # 8.7 px per frame of rotational flow: 1.05 %, 0.58 %
+        ((0.0, 0.0, 8.0), (0.0, 2.0, 0.0), 0.004, 0.0045),  # forward: 0.26 %, 0.30 %
+        ((0.5, 1.0, 1.5), (0.5, 0.5, 0.5), 0.032, 0.016),  # paper experiment 4's motion, for the camera: 2.18 %, 1.04 %
     ],
     ids=["lateral-turning-1deg", "lateral-turning-5deg", "forward-turning", "oblique-turning-about-111"],
 )
 def test_turning_camera_depth_matches_the_truth(step, turn_deg, single_max, fused_max):
     """Seven frames of a camera that turns as it moves: each triple's depth and the fused depth at the last frame.
 
-    Bounds are about 1.5 times the measured medians (seed 1; seeds 0-2
+    Bounds are about 1.5 times the measured medians (seed 1; seeds 0-3
     spread by 10-15 % of them). Without turning, the lateral camera gives
-    0.91 % per triple and 0.49 % fused (``benchmarks/video_turning.py``).
+    0.91 % per triple and 0.49 % fused (``benchmarks/video_turning.py``):
+    turning costs little (bilinear resampling of the outer frames cost
+    1.3-1.4 % and 0.8-1.0 %).
     """
     frames, positions, orientations, motion, times = _film(step, turn_deg, n_frames=7)
     out = list(depth_from_video(frames, camera=CAMERA, positions=positions, orientations_rad=orientations))
@@ -70,7 +72,7 @@ def test_turning_camera_depth_matches_the_truth(step, turn_deg, single_max, fuse
     err, (ii, jj) = _map_errors(out[-1].inverse_depth, motion, times[-2])
     assert err.size > 500
     assert np.median(err) < fused_max
-    # the std is honest: median |error| / std near a Gaussian's 0.67 (measured 0.50-0.79)
+    # the std is honest: median |error| / std near a Gaussian's 0.67 (measured 0.41-0.56)
     rho = out[-1].inverse_depth[ii, jj]
     z = _truth(motion, times[-2], ii + 0.5, jj + 0.5)
     assert 0.4 < np.median(np.abs(rho - 1.0 / z) / out[-1].inverse_depth_std[ii, jj]) < 1.2
@@ -97,13 +99,14 @@ def _first_order_and_turned(turn_deg):
 def test_turning_is_exact_where_the_first_order_term_fails():
     """Eq. 4's A is the rotational flow to first order: fine at 0.1 deg per frame, 41 % wrong at 2 deg (3.5 px at f = 100).
 
-    Turning the frames (a homography) is exact: 1.45 % and 2.3 % (seed 1;
-    the translation alone moves the points 0.5-1 px per frame).
+    Turning the frames (a homography) is exact: 1.0 % and 1.2 % (seed 1,
+    against 1.4 % and 41 %; the translation alone moves the points 0.5-1
+    px per frame).
     """
     first_order, turned = _first_order_and_turned((0.0, 0.1, 0.0))
-    assert turned < 0.02 and abs(first_order - turned) < 0.003
+    assert turned < 0.015 and first_order < 0.02
     first_order, turned = _first_order_and_turned((0.0, 2.0, 0.0))
-    assert turned < 0.035
+    assert turned < 0.02
     assert first_order > 0.25
 
 
@@ -156,9 +159,9 @@ def test_points_a_turned_frame_did_not_see_have_no_data():
     ii, jj = np.nonzero(np.isfinite(r.measured_inverse_depth))
     assert ii.size > 300 and whole[ii, jj].all()
     # along the middle row: 17.4 px seen by one outer frame only (the rotational flow f (1 + x^2) theta at
-    # the border, x = 1), then the smoothing's 3 sigma and the stencil's 1 px: 24 px on either side
+    # the border, x = 1), then the smoothing's kernel (4 sigma) and the stencil's 2 px: 27 px on either side
     void = np.nonzero(~whole[100])[0]
-    np.testing.assert_array_equal(void, np.r_[0:24, 176:200])
+    np.testing.assert_array_equal(void, np.r_[0:27, 173:200])
 
 
 def test_derotation_of_a_pure_rotation_is_exact():
@@ -216,7 +219,7 @@ def test_tsukuba_row_filmed_by_a_turning_camera(tsukuba):
 
     Each view is resampled as the turned camera would see it (a homography,
     exact for a rotation) and cropped to what all of them see. At the
-    reference view: median relative error 4.6 %, bad-1px 6.2 % at 660
+    reference view: median relative error 4.7 %, bad-1px 8.0 % at 635
     points (`benchmarks/video_rows.py --turn-deg-per-frame 1`); the camera
     that does not turn, on the whole frame: 4.25 % and 5.4 %.
     """
@@ -241,4 +244,73 @@ def test_tsukuba_row_filmed_by_a_turning_camera(tsukuba):
     err = np.abs(cam.focal_px * rho[m] - truth[m])
     assert m.sum() > 500
     assert np.median(err / truth[m]) < 0.06
-    assert np.mean(err > 1.0) < 0.09
+    assert np.mean(err > 1.0) < 0.1
+
+
+def test_a_full_turn_is_no_turn():
+    """Orientations 2 pi apart, or 1e-12 rad apart, are the same orientation: nothing is resampled and no border band is lost."""
+    frames, positions, _, _, _ = _film((2.0, 0.0, 0.0), (0.0, 0.0, 0.0), n_frames=3)
+    (plain,) = depth_from_video(frames, camera=CAMERA, positions=positions)
+    for offset in (2.0 * np.pi, 1e-12):
+        orientations = np.array([[0.0, offset, 0.0], [0.0, 0.0, 0.0], [0.0, -offset, 0.0]])
+        (same,) = depth_from_video(frames, camera=CAMERA, positions=positions, orientations_rad=orientations)
+        np.testing.assert_array_equal(same.measured_inverse_depth, plain.measured_inverse_depth)
+
+
+def test_turning_away_from_the_scene_is_reported():
+    """45 degrees per frame at a 90 degree field of view: the neighbours see less than half of the middle frame; a warning says so."""
+    frames, positions, orientations, _, _ = _film((2.0, 0.0, 0.0), (0.0, 0.0, 0.0), n_frames=3)
+    orientations = np.array([[0.0, -0.8, 0.0], [0.0, 0.0, 0.0], [0.0, 0.8, 0.0]])
+    with pytest.warns(UserWarning, match=r"in 1 of 1 frames \(1\) the camera turned so far that both of its neighbours see as little as 0 % of the frame"):
+        (r,) = depth_from_video(frames, camera=CAMERA, positions=positions, orientations_rad=orientations)
+    assert not np.isfinite(r.measured_inverse_depth).any()
+
+
+@pytest.mark.parametrize(
+    ("orientations", "exc", "message"),
+    [
+        (np.full((3, 3), 1e160), ValueError, r"orientations_rad\[0\] = \(1e\+160, 1e\+160, 1e\+160\), a turn of 1\.73205e\+160 rad: expected at most 17453\.3"),
+        (np.full((3, 3), 1e308), ValueError, r"a turn of 1\.73205e\+308 rad: expected at most"),
+        (np.ones((3, 3), complex), TypeError, r"orientations_rad must be numbers \(3 camera-to-world rotation vectors in radians.*complex128"),
+        ([["a", "b", "c"]] * 3, TypeError, r"orientations_rad must be numbers .*<U1"),
+    ],
+    ids=["huge", "overflowing", "complex", "strings"],
+)
+def test_orientations_refused(orientations, exc, message):
+    frames, positions, _, _, _ = _film((2.0, 0.0, 0.0), (0.0, 0.0, 0.0), n_frames=3)
+    with pytest.raises(exc, match=message):
+        next(depth_from_video(frames, camera=CAMERA, positions=positions, orientations_rad=orientations))
+
+
+def test_poses_csv_turn_beyond_the_float_range_is_refused(tmp_path):
+    from nfdepth.rig import RigError, load_poses
+
+    (tmp_path / "p.csv").write_text("frame,x,y,z,rx,ry,rz\n0,0,0,0,0,0,0\n1,1,0,0,0,1e160,0\n")
+    with pytest.raises(RigError, match=r"p\.csv' line 3: rx, ry, rz = .*a turn of 1e\+160 degrees: expected at most 1e\+06"):
+        load_poses(tmp_path / "p.csv")
+
+
+def test_frames_beyond_opencvs_remap_limit():
+    """cv2.remap refuses sides of 32767 px or more: a 33000 px wide turning strip, and edge-point lists that long, still work."""
+    from nfdepth._resample import remap_linear, sample_points
+
+    rng = np.random.default_rng(3)
+    image = rng.normal(size=(6, 40)).astype(np.float32)
+    rows, cols = rng.uniform(-1, 6, 40000), rng.uniform(-1, 40, 40000)
+    many = sample_points(image, rows, cols)
+    few = np.concatenate([sample_points(image, rows[i : i + 1000], cols[i : i + 1000]) for i in range(0, 40000, 1000)])
+    np.testing.assert_array_equal(many, few)
+    wide = np.tile(image, (1, 900))  # 36000 px: the scipy path, the same bilinear reads without OpenCV's 1/32 px steps
+    r, c = np.mgrid[0:6, 0:36000].astype(np.float32)
+    shifted = remap_linear(wide, c + np.float32(0.5), r)
+    np.testing.assert_allclose(shifted[:, :-1], 0.5 * (wide[:, :-1] + wide[:, 1:]), atol=1e-6)
+    # a turning camera over a strip 33000 px wide (the edges of a smooth stripe pattern)
+    cam = PinholeCamera(focal_px=1000.0, width_px=33000, height_px=8)
+    x = np.arange(33000, dtype=np.float32)
+    frames = [np.broadcast_to(100 + 50 * np.sin((x + 0.5 * k) / 7.0), (8, 33000)).astype(np.float32) for k in range(3)]
+    positions = np.array([[0.0, 0, 0], [1.0, 0, 0], [2.0, 0, 0]])
+    orientations = np.array([[0.0, 0.0, -1e-4], [0.0, 0.0, 0.0], [0.0, 0.0, 1e-4]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a strip 8 px tall: few points, some warnings about them
+        (r,) = depth_from_video(frames, camera=cam, positions=positions, orientations_rad=orientations, levels=1)
+    assert r.measured_inverse_depth.shape == (8, 33000)

@@ -20,8 +20,13 @@ import math
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 from .camera import PinholeCamera
+
+#: A turn that moves no pixel by more than this is no turn: the frame is used as taken
+#: (orientations that differ by a full turn, or by float rounding, are the same).
+STILL_PX = 1e-6
 
 
 def derotation_maps(camera: PinholeCamera, rotation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -31,8 +36,10 @@ def derotation_maps(camera: PinholeCamera, rotation) -> tuple[np.ndarray, np.nda
     (camera-to-world ``R_k``) in the camera axes of the frame as taken
     (``R_j``). A ray ``d`` of the target reads the frame at the projection of
     ``R_j^T R_k d``. Returns ``(map_col, map_row, inside)``: float32 maps
-    for ``cv2.remap`` (pixel centres at integers, as the camera's) and
-    where the read lies in front of the camera and inside the frame.
+    for :func:`derotate` (pixel centres at integers, as the camera's) and
+    where the read lies in front of the camera and inside the frame (to
+    :data:`STILL_PX`). Reads outside are clamped to the frame's border,
+    reads behind the camera go to its corner.
     """
     h, w = camera.shape
     f = camera.focal_px
@@ -42,24 +49,46 @@ def derotation_maps(camera: PinholeCamera, rotation) -> tuple[np.ndarray, np.nda
     # R (x, y, 1) for every pixel, by columns of R (no (H, W, 3) temporary)
     turned = [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]
     ahead = turned[2] > 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        col = camera.cx_px + f * turned[0] / turned[2]
-        row = camera.cy_px + f * turned[1] / turned[2]
-    inside = ahead & (col >= 0) & (col <= w - 1) & (row >= 0) & (row <= h - 1)
-    # reads behind the camera or far outside: any finite place (the border is replicated; ``inside`` says they are void)
-    col = np.where(inside, col, -1.0).astype(np.float32)
-    row = np.where(inside, row, -1.0).astype(np.float32)
-    return col, row, inside
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        col = np.where(ahead, camera.cx_px + f * turned[0] / turned[2], -1.0)
+        row = np.where(ahead, camera.cy_px + f * turned[1] / turned[2], -1.0)
+    inside = ahead & (col >= -STILL_PX) & (col <= w - 1 + STILL_PX) & (row >= -STILL_PX) & (row <= h - 1 + STILL_PX)
+    return np.clip(col, -1.0, w).astype(np.float32), np.clip(row, -1.0, h).astype(np.float32), inside
+
+
+def moves_pixels(camera: PinholeCamera, rotation) -> bool:
+    """Whether turning by ``rotation`` (as for :func:`derotation_maps`) moves some pixel by more than :data:`STILL_PX`."""
+    h, w = camera.shape
+    corners = np.array([[0.0, 0.0], [0.0, w - 1.0], [h - 1.0, 0.0], [h - 1.0, w - 1.0], [camera.cy_px, camera.cx_px]])
+    x = (corners[:, 1] - camera.cx_px) / camera.focal_px
+    y = (corners[:, 0] - camera.cy_px) / camera.focal_px
+    d = np.asarray(rotation, dtype=np.float64) @ np.stack([x, y, np.ones_like(x)])
+    if np.any(d[2] <= 0):
+        return True
+    # a rotation fixes at most one image point (where its axis meets the image): the others of these five move
+    moved = np.hypot(d[0] / d[2] - x, d[1] / d[2] - y) * camera.focal_px
+    return bool(np.max(moved) > STILL_PX)
 
 
 def derotate(image: np.ndarray, maps) -> np.ndarray:
-    """``image`` resampled through ``maps`` (:func:`derotation_maps`): bilinear, border replicated, same dtype."""
+    """``image`` resampled through ``maps`` (:func:`derotation_maps`): cubic spline, border replicated, float32.
+
+    Bilinear reads blur the turned frame by an amount that varies with the
+    fraction of a pixel read, unlike the middle frame, and the blur reads
+    as motion at strong edges: on the pyramid turning 5 degrees per frame
+    (one triple, 3 seeds) the median error was 2.1-2.5 % and 13 % of the
+    points of a diagonal step were off by more than 10 %; with the cubic
+    spline 1.3-1.8 % and 0.1 % (a quintic: no better; 15 ms a 640 x 480
+    frame against 0.2 ms).
+    """
     map_col, map_row, _inside = maps
-    return cv2.remap(image, map_col, map_row, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return ndimage.map_coordinates(np.asarray(image, np.float32), [map_row, map_col], order=3, mode="nearest", output=np.float32)
 
 
 def measurable(inside: np.ndarray, *, sigma_px: float) -> np.ndarray:
-    """``inside`` shrunk by the reach of a Gaussian of ``sigma_px`` and the 2 x 2 stencil: where no void read enters a measurement."""
-    reach = math.ceil(3.0 * sigma_px) + 1
-    kernel = np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)
-    return cv2.erode(inside.astype(np.uint8), kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1).astype(bool)
+    """``inside`` shrunk by the reach of the smoothing (4 ``sigma_px``) and the stencil (2 px): where no void read enters a measurement."""
+    side = 2 * (math.ceil(4.0 * sigma_px) + 2) + 1
+    shrunk = inside.astype(np.uint8)
+    for kernel in (np.ones((1, side), np.uint8), np.ones((side, 1), np.uint8)):  # a square, as two lines
+        shrunk = cv2.erode(shrunk, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1)
+    return shrunk.astype(bool)

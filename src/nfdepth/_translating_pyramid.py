@@ -49,6 +49,7 @@ import warnings
 import cv2
 import numpy as np
 
+from ._resample import remap_linear, sample_points
 from .camera import PinholeCamera, RigidMotion, _magnitude
 from .depth import Reason, solve_inverse_depth
 from .normal_flow import gaussian_smooth
@@ -93,7 +94,7 @@ def warp_outer_frames(frames, rho, a_col, a_row):
     for frame, sign in ((frames[0], -1.0), (frames[2], 1.0)):
         map_c = (cols + np.float32(sign) * du).astype(np.float32)
         map_r = (rows + np.float32(sign) * dv).astype(np.float32)
-        out.append(cv2.remap(frame, map_c, map_r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE))
+        out.append(remap_linear(frame, map_c, map_r))
         inside &= (map_c >= 0) & (map_c <= w - 1) & (map_r >= 0) & (map_r <= h - 1)
     return out[0], out[1], inside
 
@@ -123,15 +124,6 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int) -> n
             step = np.clip(-num / (den + ridge), -limit, limit)
             rho = cv2.medianBlur((rho + step).astype(np.float32), 5)
     return rho
-
-
-def _at_points(image: np.ndarray, rows, cols) -> np.ndarray:
-    """Bilinear samples of ``image`` (pixel centres at integers) at ``(rows, cols)``."""
-    c = np.asarray(cols, np.float32)[None, :]
-    r = np.asarray(rows, np.float32)[None, :]
-    if c.size == 0:  # no edge points (cv2.remap refuses an empty map)
-        return np.zeros(0)
-    return cv2.remap(image, c, r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)[0].astype(np.float64)
 
 
 def _step_span(motion: np.ndarray, reach_px: int) -> np.ndarray:
@@ -169,7 +161,7 @@ def edge_depth_coarse_to_fine(
     relative_motion = RigidMotion(translation=translation)
     # B rho_prior, with rho_prior = prior / (f |V|) (B is f |V| times a unit vector's normal component)
     b_unit = res.inverse_depth.b / (camera.focal_px * _magnitude(translation))
-    total = res.delta_vn + b_unit * _at_points(prior, res.rows, res.cols)
+    total = res.delta_vn + b_unit * sample_points(prior, res.rows, res.cols)
     inv = solve_inverse_depth(
         total,
         camera=camera,

@@ -207,6 +207,11 @@ _AXES = {"x": np.array([1.0, 0.0, 0.0]), "y": np.array([0.0, 1.0, 0.0])}
 # ----------------------------------------------------------------- poses
 
 
+#: Largest orientation (rotation-vector length, degrees) a poses file or ``orientations_rad``
+#: may give: float64 keeps about 1e-10 degrees there; far beyond, the rotation is lost to rounding.
+MAX_TURN_DEG = 1e6
+
+
 @dataclass(frozen=True, eq=False)
 class Poses:
     """Camera poses per frame, from a CSV file (``frame,x,y,z[,rx,ry,rz]``).
@@ -296,6 +301,13 @@ def load_poses(path) -> Poses:
         raise RigError(f"poses '{path}' line {bad}: frame indices must be strictly increasing")
     arr = np.asarray(values, dtype=float)
     rot = arr[:, 3:6] if n_cols == 7 else np.zeros((arr.shape[0], 3))
+    angles = np.hypot(np.hypot(rot[:, 0], rot[:, 1]), rot[:, 2])  # (no overflow short of the float range)
+    if np.any(angles > MAX_TURN_DEG):
+        bad = int(np.argmax(angles > MAX_TURN_DEG))
+        raise RigError(
+            f"poses '{path}' line {bad + 2}: rx, ry, rz = {_point(rot[bad])}, a turn of {angles[bad]:g} degrees: expected at most"
+            f" {MAX_TURN_DEG:g} (give the orientation modulo 360 degrees: beyond that float64 loses its fractions of a degree)"
+        )
     return Poses(frames_arr, arr[:, :3], rot, source=path)
 
 

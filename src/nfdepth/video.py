@@ -87,7 +87,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._derotation import derotate, derotation_maps, measurable
+from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine
 from ._validate import UNIT_SCALE_RANGE, as_image, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
@@ -103,7 +103,7 @@ from .pipelines import (
     _noise_level,
     static_stereo_edges,
 )
-from .rig import Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
+from .rig import MAX_TURN_DEG, Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
 from .stereo import auto_levels
 
 # FFmpeg logs a video it cannot open on stderr ("moov atom not found"), ahead of
@@ -434,11 +434,23 @@ def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None)
     _check_steps(p, "positions", error=ValueError)
     if orientations_rad is None:
         return VideoSpec(positions=p)
-    o = np.asarray(orientations_rad, dtype=float)
+    expected = f"{p.shape[0]} camera-to-world rotation vectors in radians, shape {p.shape} as positions"
+    try:
+        o = np.asarray(orientations_rad)
+        if o.dtype.kind not in "biuf":
+            raise TypeError(f"array of {o.dtype}")
+        o = o.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"orientations_rad must be numbers ({expected}), got {exc}") from None
     if o.shape != p.shape or not np.all(np.isfinite(o)):
+        msg = f"orientations_rad must have the shape of positions, {p.shape}, with finite values ({expected}), got shape {o.shape}"
+        raise ValueError(msg)
+    turn = np.hypot(np.hypot(o[:, 0], o[:, 1]), o[:, 2])  # (no overflow short of the float range)
+    if np.any(turn > np.deg2rad(MAX_TURN_DEG)):
+        k = int(np.argmax(turn > np.deg2rad(MAX_TURN_DEG)))
         msg = (
-            f"orientations_rad must have the shape of positions, {p.shape}, with finite values (one camera-to-world rotation"
-            f" vector per frame, radians), got shape {o.shape}"
+            f"orientations_rad[{k}] = {_vec(o[k])}, a turn of {turn[k]:g} rad: expected at most"
+            f" {np.deg2rad(MAX_TURN_DEG):g} (give it modulo 2 pi: beyond that float64 loses the rotation's fractions)"
         )
         raise ValueError(msg)
     return VideoSpec(positions=p, orientations_deg=np.rad2deg(o))
@@ -533,6 +545,10 @@ def _camera_rotation(spec: VideoSpec, frame: int) -> np.ndarray:
     return Rotation.from_rotvec(np.deg2rad(spec.orientation_deg(frame))).as_matrix()
 
 
+#: A turning triple whose outer frames both see less than this fraction of the middle one is reported.
+_LEAST_SEEN = 0.5
+
+
 def _void_outside(res: EdgeDepth, whole: np.ndarray) -> None:
     """Edge points of ``res`` outside ``whole`` (a turned outer frame had nothing to read there) become ``NO_DATA``."""
     inv = res.inverse_depth
@@ -545,10 +561,20 @@ def _void_outside(res: EdgeDepth, whole: np.ndarray) -> None:
 
 
 def _turned_triple(window: list[np.ndarray], cam: PinholeCamera, rotations, *, sigma_px: float):
-    """The outer frames turned to the middle one's orientation (:mod:`nfdepth._derotation`), and where a measurement is whole."""
-    maps = [derotation_maps(cam, rotations[j].T @ rotations[1]) for j in (0, 2)]
-    triple = [derotate(window[0], maps[0]), window[1], derotate(window[2], maps[1])]
-    return triple, measurable(maps[0][2] & maps[1][2], sigma_px=sigma_px)
+    """The outer frames turned to the middle one's orientation (:mod:`nfdepth._derotation`), and where a measurement is whole.
+
+    A frame whose turn moves no pixel (by more than ``STILL_PX``: a full
+    turn, float rounding) is used as taken; ``None`` for the mask when
+    neither turns.
+    """
+    triple, inside = list(window), None
+    for j in (0, 2):
+        turn = rotations[j].T @ rotations[1]
+        if moves_pixels(cam, turn):
+            maps = derotation_maps(cam, turn)
+            triple[j] = derotate(window[j], maps)
+            inside = maps[2] if inside is None else inside & maps[2]
+    return triple, None if inside is None else measurable(inside, sigma_px=sigma_px)
 
 
 def depth_from_video(
@@ -661,7 +687,9 @@ def depth_from_video(
         when in some triples the edge points move a median of more than 2 px
         per frame across the stencil (with ``levels=1``, or where the
         pyramid's prior failed): their depths are wrong by up to tens of
-        percent.
+        percent, and when in some triples the camera turns so far that
+        less than half of the middle frame is seen by both of its
+        neighbours (the rest has no depth).
     """
     spec = _positions_from(rig, velocity, positions, orientations_rad)
     cam = camera if camera is not None else (rig.camera if rig is not None else None)
@@ -698,6 +726,8 @@ def depth_from_video(
     largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
     fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
+    blind_frames: list[int] = []  # frames of which the turned outer frames see less than half
+    seen = 1.0  # the least of it
     fastest = 0.0
     behind_points = determinable_points = 0
     triples = 0
@@ -762,6 +792,9 @@ def depth_from_video(
             mask = res.selection.mask
             if whole is not None:
                 _void_outside(res, whole)
+                if whole.mean() < _LEAST_SEEN:
+                    blind_frames.append(k)
+                    seen = min(seen, float(whole.mean()))
                 mask = mask & whole[: mask.shape[0], : mask.shape[1]]
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
             shift = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
@@ -845,6 +878,15 @@ def depth_from_video(
             f"in {len(fast_frames)} of {triples} frames ({_frame_list(fast_frames)}) the edge points move a median of up to"
             f" {fastest:.1f} px per frame{'' if levels == 1 else ' after warping by the prior'}, beyond the differential"
             f" method's range of about 2 px: their depths are wrong by up to tens of percent; {advice}",
+            UserWarning,
+            stacklevel=2,
+        )
+    if blind_frames:
+        warnings.warn(
+            f"in {len(blind_frames)} of {triples} frames ({_frame_list(blind_frames)}) the camera turned so far that both of"
+            f" its neighbours see as little as {100 * seen:.0f} % of the frame: edge points elsewhere have no depth (NO_DATA);"
+            " use frames closer together in time, or check the orientations' unit (degrees in a poses CSV, radians in"
+            " orientations_rad)",
             UserWarning,
             stacklevel=2,
         )
