@@ -1,6 +1,7 @@
 """Coarse-to-fine multi-view static stereo (nfdepth.stereo)."""
 
 import itertools
+import warnings
 
 import numpy as np
 import pytest
@@ -958,3 +959,15 @@ def test_depth_refuses_focal_lengths_and_baselines_outside_the_unit_range():
             r.depth(focal_px=f, baseline=b)
     assert np.nanmedian(r.depth(focal_px=1e20, baseline=1e-20)) == pytest.approx(0.5, rel=1e-3)
     assert np.nanmedian(r.depth(focal_px=1e30, baseline=1e-30)) == pytest.approx(0.5, rel=1e-3)
+
+
+def test_views_beyond_opencvs_remap_limit():
+    """Views 33000 px wide (cv2.remap refuses 32767 px or more on a side) go through nfdepth._resample: a raw cv2.error before."""
+    x = np.arange(33000, dtype=np.float32)
+    views = [np.broadcast_to(100 + 50 * np.sin((x + k) / 7.0), (24, 33000)).astype(np.float32) for k in range(3)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a strip 24 px tall: warnings about its borders are not the point here
+        res = static_stereo(views, reference=1)
+    d = res.disparity[np.isfinite(res.disparity)]
+    assert d.size > 0.5 * res.disparity.size
+    assert np.median(d) == pytest.approx(1.0, abs=0.01)  # the pattern moves 1 px per view

@@ -267,6 +267,7 @@ from . import _view_fit
 from . import fast as _fast
 from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
+from ._resample import remap_linear
 from ._scratch import STEREO as _SCRATCH
 from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
@@ -616,7 +617,7 @@ def _view_costs(smoothed, t, ref, d):
         if k == ref:
             continue
         map_x = (cols - np.float32(t[k]) * d).astype(np.float32)
-        warped = cv2.remap(smoothed[k], map_x, rows, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        warped = remap_linear(smoothed[k], map_x, rows)
         c = np.abs(warped - smoothed[ref])
         outside = (map_x < 0) | (map_x > w - 1)
         out[k] = np.where(outside, np.nan, c).astype(np.float32)
@@ -809,7 +810,7 @@ class _ReferenceNodes:
         h, w = smoothed_ref.shape
         cols = (np.arange(w + 1, dtype=np.float32) - 0.5)[None, :]
         map_y = np.broadcast_to((np.arange(h + 1, dtype=np.float32) - 0.5)[:, None], (h + 1, w + 1)).astype(np.float32)
-        nodes = cv2.remap(smoothed_ref, np.broadcast_to(cols, (h + 1, w + 1)).astype(np.float32), map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        nodes = remap_linear(smoothed_ref, np.broadcast_to(cols, (h + 1, w + 1)).astype(np.float32), map_y)
         return cls(cols, map_y, nodes, *_cell_gradient(nodes, True))
 
 
@@ -837,7 +838,7 @@ def _measure(smoothed, t, ref, d_pix, *, floor, window_px, reference, offset_win
     diffs, gcs, grs, inside = [None] * n, [None] * n, [None] * n, [None] * n
     for j, k in enumerate(views):
         map_x = (cols - t[k] * d_nodes).astype(np.float32)
-        warped = cv2.remap(smoothed[k], map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        warped = remap_linear(smoothed[k], map_x, map_y)
         inside_nodes = (map_x >= -0.5) & (map_x <= w - 0.5)
         inside[k] = stack_in[j]
         np.logical_and(inside_nodes[:-1, :-1] & inside_nodes[:-1, 1:], inside_nodes[1:, :-1] & inside_nodes[1:, 1:], out=inside[k], casting="unsafe")
@@ -928,7 +929,7 @@ class _EdgePatches:
         for j, off in enumerate(self._OFFS):
             np.add(centre, off, out=self.map_x[:, 0, :, j])
         self.map_x[:, 1] = self.map_x[:, 0]
-        patch = cv2.remap(image, self.map_x.reshape(2 * self.n_rows, 4 * _TILE), self.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        patch = remap_linear(image, self.map_x.reshape(2 * self.n_rows, 4 * _TILE), self.map_y)
         w = image.shape[1]
         c = centre.ravel()[: self.n]
         inside = (c + self._OFFS[0] >= -0.5) & (c + self._OFFS[-1] <= w - 0.5)
