@@ -896,6 +896,17 @@ def dynamic_sequence(
     )
 
 
+def _film(polyhedron, camera, motion: CameraMotion, n: int, reference_index, **render_options):
+    """``n`` frames of ``motion`` at times ``k - reference_index`` (checked to index a frame): ``(times, frames)``."""
+    ref = check_int("reference_index", reference_index, 0)
+    if ref >= n:
+        msg = f"reference_index must be in 0..{n - 1}, got {ref}"
+        raise ValueError(msg)
+    _check_noise(render_options["noise_std"], render_options["rng"])
+    times = np.arange(n, dtype=float) - ref
+    return times, np.stack([render(polyhedron, camera, camera_motion=motion, time=t, **render_options).image for t in times])
+
+
 def static_sequence(
     polyhedron,
     camera,
@@ -934,19 +945,11 @@ def static_sequence(
     _check_camera(camera)
     n = check_int("n_views", n_views, 2)
     step = as_vector3("camera_step", camera_step)
-    ref = (n - 1) // 2 if reference_index is None else check_int("reference_index", reference_index, 0)
-    if ref >= n:
-        msg = f"reference_index must be in 0..{n - 1}, got {ref}"
-        raise ValueError(msg)
-    _check_noise(noise_std, rng)
     motion = CameraMotion(velocity_per_t=step)
-    times = np.arange(n, dtype=float) - ref
-    frames = [
-        render(polyhedron, camera, camera_motion=motion, time=t, background=background, noise_std=noise_std, rng=rng, dtype=dtype).image
-        for t in times
-    ]
+    ref = (n - 1) // 2 if reference_index is None else reference_index
+    times, frames = _film(polyhedron, camera, motion, n, ref, background=background, noise_std=noise_std, rng=rng, dtype=dtype)
     return StaticScene(
-        frames=np.stack(frames),
+        frames=frames,
         times=times,
         reference_index=ref,
         camera=camera,
@@ -1029,18 +1032,10 @@ def video_sequence(
     _check_camera(camera)
     motion = _check_type("camera_motion", camera_motion, CameraMotion, allow_none=False)
     n = check_int("n_frames", n_frames, 1)
-    ref = n // 2 if reference_index is None else check_int("reference_index", reference_index, 0)
-    if ref >= n:
-        msg = f"reference_index must be in 0..{n - 1}, got {ref}"
-        raise ValueError(msg)
-    _check_noise(noise_std, rng)
-    times = np.arange(n, dtype=float) - ref
-    frames = [
-        render(polyhedron, camera, camera_motion=motion, time=t, background=background, noise_std=noise_std, rng=rng, dtype=dtype).image
-        for t in times
-    ]
+    ref = n // 2 if reference_index is None else reference_index
+    times, frames = _film(polyhedron, camera, motion, n, ref, background=background, noise_std=noise_std, rng=rng, dtype=dtype)
     return VideoScene(
-        frames=np.stack(frames),
+        frames=frames,
         times=times,
         camera=camera,
         camera_motion=motion,

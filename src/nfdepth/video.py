@@ -825,10 +825,9 @@ def depth_from_video(
         if state is None:
             state = _State(shape)
         else:
-            if np.array_equal(prev_orientation, orientations[1]):
-                state = _predict(state, cam, rmat.T @ (p_mid - prev_pos), process_noise)
-            else:  # the camera turned since the previous frame
-                state = _predict(state, cam, prev_rotation.T @ (p_mid - prev_pos), process_noise, rotation=prev_rotation.T @ rmat)
+            turned = not np.array_equal(prev_orientation, orientations[1])  # since the previous frame
+            rotation = prev_rotation.T @ rmat if turned else None
+            state = _predict(state, cam, prev_rotation.T @ (p_mid - prev_pos), process_noise, rotation=rotation)
         state = _update(state, rho_m, var_m, gate=gate, max_age=max_age)
         prev_pos, prev_orientation, prev_rotation = p_mid, orientations[1], rmat
         if not moves and not moved:
