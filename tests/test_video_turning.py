@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from turned_rows import turned_row
 
 import nfdepth.cli
 from nfdepth import synthetic
@@ -223,17 +224,8 @@ def test_tsukuba_row_filmed_by_a_turning_camera(tsukuba):
     points (`benchmarks/video_rows.py --turn-deg-per-frame 1`); the camera
     that does not turn, on the whole frame: 4.25 % and 5.4 %.
     """
-    h, w = tsukuba.shape
-    full = PinholeCamera(float(w), w, h)
     ref = tsukuba.reference_index
-    angles = np.deg2rad(1.0) * (np.arange(ref + 2) - ref)
-    maps = [derotation_maps(full, Rotation.from_rotvec((0.0, a, 0.0)).as_matrix()) for a in angles]
-    inside = np.logical_and.reduce([m[2] for m in maps])
-    margin = next(m for m in range(min(h, w) // 2) if inside[m : h - m, m : w - m].all())
-    crop = (slice(margin, h - margin), slice(margin, w - margin))
-    frames = [derotate(np.asarray(v, np.float32), m)[crop] for v, m in zip(tsukuba.views, maps)]
-    cam = PinholeCamera(full.focal_px, w - 2 * margin, h - 2 * margin)
-    orientations = np.stack([np.zeros_like(angles), angles, np.zeros_like(angles)], axis=1)
+    frames, cam, orientations, crop = turned_row(tsukuba, 1.0)
     positions = np.arange(len(frames))[:, None] * np.array([1.0, 0.0, 0.0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a few behind-camera points at the image border

@@ -304,8 +304,10 @@ def _video_output(args, CLIError):
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
         raise CLIError(f"--out '{out}': directory '{parent}' does not exist", EXIT_WRITE)
-    if out.is_dir() and not args.force and any(out.glob("depth_*.tif")):
-        raise CLIError(f"--out '{out}' already holds depth_*.tif files; use --force to overwrite them", EXIT_WRITE)
+    if out.is_dir() and not args.force:
+        for pattern in ("depth_*.tif", "dense_depth_*.tif"):
+            if any(out.glob(pattern)):
+                raise CLIError(f"--out '{out}' already holds {pattern} files; use --force to overwrite them", EXIT_WRITE)
     return "dir", out
 
 
@@ -318,6 +320,14 @@ def _cmd_video(args) -> int:
     options = _check_sigma(args, CLIError)
     if args.levels is not None:
         options["levels"] = args.levels
+    if args.threads is not None:
+        if not args.dense:
+            raise CLIError("--threads goes with --dense (the dense maps' cost volume)")
+        if args.threads < 1:
+            raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
+        options["threads"] = args.threads
+    if args.dense:
+        options["dense"] = True
     figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
@@ -410,6 +420,13 @@ def register(sub, CLIError) -> None:
         type=int,
         help="pyramid levels of each triple's coarse-to-fine prior, for motions beyond 1-2 px per frame (default: from the frame size; 1: the paper's single level)",
     )
+    p.add_argument(
+        "--dense",
+        action="store_true",
+        help="also a dense depth map of every frame's triple (rectified static stereo; not fused over time): arrays dense_depth,"
+        " dense_depth_std in OUT.npz, or dense_depth_NNNNNN.tif, dense_depth_std_NNNNNN.tif in a folder",
+    )
+    p.add_argument("--threads", type=int, metavar="N", help="with --dense: threads of the cost volume (default: all cores, as OpenCV)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_video)

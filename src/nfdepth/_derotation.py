@@ -29,7 +29,7 @@ from .camera import PinholeCamera
 STILL_PX = 1e-6
 
 
-def derotation_maps(camera: PinholeCamera, rotation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def derotation_maps(camera: PinholeCamera, rotation, *, grid=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where each pixel of a frame turned to another orientation reads the frame as taken.
 
     ``rotation`` (3 x 3) is ``R_j^T R_k``: the target orientation's axes
@@ -40,11 +40,16 @@ def derotation_maps(camera: PinholeCamera, rotation) -> tuple[np.ndarray, np.nda
     where the read lies in front of the camera and inside the frame (to
     :data:`STILL_PX`). Reads outside are clamped to the frame's border,
     reads behind the camera go to its corner.
+
+    ``grid``, ``(height, width, cx_px, cy_px)``, gives the turned frame
+    another pixel grid of the same focal length (a canvas that holds all of
+    a frame turned far, :mod:`nfdepth._dense_video`); default the camera's own.
     """
     h, w = camera.shape
     f = camera.focal_px
-    x = (np.arange(w, dtype=np.float64) - camera.cx_px) / f
-    y = (np.arange(h, dtype=np.float64) - camera.cy_px) / f
+    out_h, out_w, out_cx, out_cy = (h, w, camera.cx_px, camera.cy_px) if grid is None else grid
+    x = (np.arange(out_w, dtype=np.float64) - out_cx) / f
+    y = (np.arange(out_h, dtype=np.float64) - out_cy) / f
     r = np.asarray(rotation, dtype=np.float64)
     # R (x, y, 1) for every pixel, by columns of R (no (H, W, 3) temporary)
     turned = [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]

@@ -87,9 +87,10 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ._dense_video import MIN_SIDEWAYS_DEG, dense_triple
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine
-from ._validate import UNIT_SCALE_RANGE, as_image, check_int, check_noise_std, check_scale_px, check_threshold
+from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
@@ -121,6 +122,7 @@ __all__ = [
     "depth_from_video",
     "VIDEO_EXTENSIONS",
     "NPZ_ARRAYS",
+    "NPZ_DENSE_ARRAYS",
     "write_video_npz",
     "write_video_frame",
     "video_frame_names",
@@ -265,6 +267,11 @@ class VideoDepthFrame:
         Optical centre of the frame (world coordinates).
     baseline : float
         ``|T|``: the camera's translation per frame around this frame.
+    dense_inverse_depth, dense_inverse_depth_std : ndarray, float32, or None
+        With ``depth_from_video(..., dense=True)``: this triple's dense
+        inverse depth and its std at every pixel static stereo measures
+        (NaN elsewhere; not fused over time). Pixel-centred, unlike the
+        maps above (:mod:`nfdepth._dense_video`). None without ``dense``.
     """
 
     index: int
@@ -275,23 +282,43 @@ class VideoDepthFrame:
     count: np.ndarray
     camera_position: np.ndarray
     baseline: float
+    dense_inverse_depth: np.ndarray | None = None
+    dense_inverse_depth_std: np.ndarray | None = None
 
     @property
     def depth(self) -> np.ndarray:
         """Fused depth ``1 / rho`` (NaN where unknown)."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(self.inverse_depth > 0, 1.0 / self.inverse_depth, np.nan).astype(np.float32)
+        return _depth(self.inverse_depth)
 
     @property
     def depth_std(self) -> np.ndarray:
         """First-order std of the fused depth, ``rho_std / rho**2``."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(self.inverse_depth > 0, self.inverse_depth_std / self.inverse_depth**2, np.nan).astype(np.float32)
+        return _depth_std(self.inverse_depth, self.inverse_depth_std)
 
     @property
     def measured(self) -> np.ndarray:
         """Pixels with a measurement from this frame's triple."""
         return np.isfinite(self.measured_inverse_depth)
+
+    @property
+    def dense_depth(self) -> np.ndarray | None:
+        """Dense depth ``1 / rho`` of this triple (NaN where unknown), None without ``dense``."""
+        return None if self.dense_inverse_depth is None else _depth(self.dense_inverse_depth)
+
+    @property
+    def dense_depth_std(self) -> np.ndarray | None:
+        """First-order std of the dense depth, ``rho_std / rho**2``; None without ``dense``."""
+        return None if self.dense_inverse_depth is None else _depth_std(self.dense_inverse_depth, self.dense_inverse_depth_std)
+
+
+def _depth(rho) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(rho > 0, 1.0 / rho, np.nan).astype(np.float32)
+
+
+def _depth_std(rho, rho_std) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(rho > 0, rho_std / rho**2, np.nan).astype(np.float32)
 
 
 # ------------------------------------------------------------------ fusion
@@ -545,8 +572,12 @@ def _camera_rotation(spec: VideoSpec, frame: int) -> np.ndarray:
     return Rotation.from_rotvec(np.deg2rad(spec.orientation_deg(frame))).as_matrix()
 
 
-#: A turning triple whose outer frames both see less than this fraction of the middle one is reported.
+#: A turning triple whose outer frames both see less than this fraction of the middle one is reported
+#: (with ``dense``: also one whose rectified canvas holds less than this fraction of it).
 _LEAST_SEEN = 0.5
+#: With ``dense``: a middle position further than this (relative to half the outer two's distance)
+#: from the line through the outer two is reported.
+_MAX_OFF_LINE = 0.02
 
 
 def _void_outside(res: EdgeDepth, whole: np.ndarray) -> None:
@@ -597,6 +628,8 @@ def depth_from_video(
     levels: int | None = None,
     max_residual_px: float = 1.0,
     edge_step_px: float = 1.0,
+    dense: bool = False,
+    threads: int | None = None,
 ) -> Iterator[VideoDepthFrame]:
     """Depth per frame of a camera moving (translating, and turning if its poses say so) through a static scene, fused over time.
 
@@ -653,6 +686,14 @@ def depth_from_video(
         more than this (px per frame) within 4 px are ``UNCERTAIN``: a depth
         step, where one side of the edge is hidden in an outer frame, or a
         plane slanted by more than 1/8 px per px (0: no test).
+    dense : bool
+        Also a dense map of every triple: its frames rectified into a row
+        of views along the camera's path and measured by
+        :func:`nfdepth.stereo.static_stereo` (:mod:`nfdepth._dense_video`;
+        about 0.1-0.2 s a 640 x 480 frame). A camera moving within 5
+        degrees of its optical axis gets none (NaN maps and a warning).
+    threads : int, optional
+        Threads of the dense map's cost volume (as ``static_stereo``).
 
     Yields
     ------
@@ -689,7 +730,11 @@ def depth_from_video(
         pyramid's prior failed): their depths are wrong by up to tens of
         percent, and when in some triples the camera turns so far that
         less than half of the middle frame is seen by both of its
-        neighbours (the rest has no depth).
+        neighbours (the rest has no depth), and, with ``dense``, when in
+        some triples the camera moves so nearly along its optical axis
+        that less than half of the frame has a dense map, or the middle
+        position lies more than 2 % of the step off the line through the
+        other two (the dense map takes them as on it).
     """
     spec = _positions_from(rig, velocity, positions, orientations_rad)
     cam = camera if camera is not None else (rig.camera if rig is not None else None)
@@ -707,6 +752,9 @@ def depth_from_video(
     levels = _check_levels(levels, cam.shape)
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)
+    dense = check_bool("dense", dense)
+    if threads is not None:
+        threads = check_int("threads", threads, 1)
     if max_residual_px > _DIFFERENTIAL_RANGE_PX:
         msg = (
             f"max_residual_px = {max_residual_px:g} px is beyond the differential method's range: expected at most"
@@ -728,6 +776,10 @@ def depth_from_video(
     fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
     blind_frames: list[int] = []  # frames of which the turned outer frames see less than half
     seen = 1.0  # the least of it
+    ahead_frames: list[int] = []  # dense: frames whose path points so nearly ahead that less than half has a dense map
+    covered = 1.0  # the least of it
+    bent_frames: list[int] = []  # dense: frames off the line through their neighbours
+    bent = 0.0  # the most
     fastest = 0.0
     behind_points = determinable_points = 0
     triples = 0
@@ -768,6 +820,7 @@ def depth_from_video(
         shape = cam.shape
         rho_m = np.full(shape, np.nan)
         var_m = np.full(shape, np.nan)
+        dense_maps = (np.full(shape, np.nan, np.float32), np.full(shape, np.nan, np.float32)) if dense else (None, None)
         if moves:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
@@ -819,6 +872,18 @@ def depth_from_video(
             std = np.where(np.isfinite(std), np.maximum(std, floor), floor)
             rho_m[ii, jj] = rho
             var_m[ii, jj] = std**2
+            if dense:
+                dt = dense_triple(window, cam, rotations, (p_prev, p_mid, p_next), noise_std=edge_options["noise_std"], threads=threads)
+                known = dt.rho[np.isfinite(dt.rho) & (dt.rho != 0)]
+                to_float32_map(known, what="an inverse depth", hint=_UNITS_HINT)
+                to_float32_map(1.0 / known, what="a depth", hint=_UNITS_HINT)
+                dense_maps = (dt.rho.astype(np.float32), dt.rho_std.astype(np.float32))
+                if dt.covered < _LEAST_SEEN:
+                    ahead_frames.append(k)
+                    covered = min(covered, dt.covered)
+                if dt.off_line > _MAX_OFF_LINE:
+                    bent_frames.append(k)
+                    bent = max(bent, dt.off_line)
         else:
             static.append(k)
 
@@ -836,7 +901,7 @@ def depth_from_video(
         if not moved:
             moved = True
             for hk, hpos, hbase in held:
-                yield _empty_frame(shape, hk, hpos, hbase)
+                yield _empty_frame(shape, hk, hpos, hbase, dense=dense)
             held = []
         yield VideoDepthFrame(
             index=k,
@@ -847,6 +912,8 @@ def depth_from_video(
             count=np.minimum(state.count, np.iinfo(np.uint16).max).astype(np.uint16),
             camera_position=np.asarray(p_mid, dtype=float).copy(),
             baseline=baseline,
+            dense_inverse_depth=dense_maps[0],
+            dense_inverse_depth_std=dense_maps[1],
         )
 
     rounding = (
@@ -889,6 +956,23 @@ def depth_from_video(
             UserWarning,
             stacklevel=2,
         )
+    if ahead_frames:
+        warnings.warn(
+            f"in {len(ahead_frames)} of {triples} frames ({_frame_list(ahead_frames)}) the camera moves so nearly along its"
+            f" optical axis that as little as {100 * covered:.0f} % of the frame has a dense map (it needs a row of views"
+            f" across the path, more than {MIN_SIDEWAYS_DEG:g} degrees from straight ahead); the edge points are measured"
+            " in any direction",
+            UserWarning,
+            stacklevel=2,
+        )
+    if bent_frames:
+        warnings.warn(
+            f"in {len(bent_frames)} of {triples} frames ({_frame_list(bent_frames)}) the middle position lies up to"
+            f" {100 * bent:.0f} % of the step off the line through its neighbours' positions: their dense maps take it as on"
+            " that line (its error is a vertical misalignment of the rectified views)",
+            UserWarning,
+            stacklevel=2,
+        )
     if behind_frames:
         warnings.warn(
             f"in {len(behind_frames)} of {triples} frames ({_frame_list(behind_frames)}) most edge points came out behind the camera"
@@ -900,7 +984,7 @@ def depth_from_video(
         )
 
 
-def _empty_frame(shape, index: int, position: np.ndarray, baseline: float) -> VideoDepthFrame:
+def _empty_frame(shape, index: int, position: np.ndarray, baseline: float, *, dense: bool) -> VideoDepthFrame:
     """A frame with no estimate yet (a static triple before the camera first moves)."""
     nan = np.full(shape, np.nan, dtype=np.float32)
     return VideoDepthFrame(
@@ -912,6 +996,8 @@ def _empty_frame(shape, index: int, position: np.ndarray, baseline: float) -> Vi
         count=np.zeros(shape, dtype=np.uint16),
         camera_position=position,
         baseline=baseline,
+        dense_inverse_depth=nan.copy() if dense else None,
+        dense_inverse_depth_std=nan.copy() if dense else None,
     )
 
 
@@ -926,6 +1012,8 @@ NPZ_ARRAYS = (
     "measured_inverse_depth",
     "measured_inverse_depth_std",
 )
+#: Arrays :func:`write_video_npz` adds when the frames have dense maps (``depth_from_video(..., dense=True)``).
+NPZ_DENSE_ARRAYS = ("dense_depth", "dense_depth_std", "dense_inverse_depth", "dense_inverse_depth_std")
 
 
 def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force: bool = False) -> Path:
@@ -933,7 +1021,8 @@ def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force
 
     Holds ``index`` (N,), ``camera_position`` (N, 3), ``baseline`` (N,) and
     the float32 ``(N, H, W)`` stacks of :data:`NPZ_ARRAYS` (NaN where
-    unknown); with ``camera`` also ``focal_px``, ``cx_px``, ``cy_px``.
+    unknown), and of :data:`NPZ_DENSE_ARRAYS` when the frames have dense
+    maps; with ``camera`` also ``focal_px``, ``cx_px``, ``cy_px``.
     """
     from .io import atomic_write
 
@@ -943,25 +1032,29 @@ def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force
         "camera_position": np.array([r.camera_position for r in results], dtype=float).reshape(-1, 3),
         "baseline": np.array([r.baseline for r in results], dtype=float),
     }
-    for name in NPZ_ARRAYS:
+    dense = bool(results) and all(r.dense_inverse_depth is not None for r in results)
+    for name in NPZ_ARRAYS + (NPZ_DENSE_ARRAYS if dense else ()):
         payload[name] = np.stack([np.asarray(getattr(r, name), dtype=np.float32) for r in results]) if results else np.zeros((0, 0, 0), np.float32)
     if camera is not None:
         payload.update(focal_px=np.float64(camera.focal_px), cx_px=np.float64(camera.cx_px), cy_px=np.float64(camera.cy_px))
     return atomic_write(Path(path), lambda fh: np.savez_compressed(fh, **payload), force=force)
 
 
-def video_frame_names(index: int) -> tuple[str, str]:
-    """File names of one frame's depth and std maps in an output folder."""
-    return f"depth_{index:06d}.tif", f"depth_std_{index:06d}.tif"
+def video_frame_names(index: int, *, dense: bool = False) -> tuple[str, str]:
+    """File names of one frame's depth and std maps in an output folder (``dense``: of its dense maps)."""
+    prefix = "dense_" if dense else ""
+    return f"{prefix}depth_{index:06d}.tif", f"{prefix}depth_std_{index:06d}.tif"
 
 
-def write_video_frame(result: VideoDepthFrame, folder, *, force: bool = False) -> tuple[Path, Path]:
-    """Write one frame's fused depth and std as float32 TIFFs (NaN unknown), each atomically."""
+def write_video_frame(result: VideoDepthFrame, folder, *, force: bool = False) -> tuple[Path, ...]:
+    """Write one frame's fused depth and std as float32 TIFFs (NaN unknown), each atomically; its dense maps too when it has them."""
     from .io import write_array
 
     folder = Path(folder)
-    a, b = video_frame_names(result.index)
-    return write_array(folder / a, result.depth, force=force), write_array(folder / b, result.depth_std, force=force)
+    maps = [(video_frame_names(result.index), result.depth, result.depth_std)]
+    if getattr(result, "dense_inverse_depth", None) is not None:
+        maps.append((video_frame_names(result.index, dense=True), result.dense_depth, result.dense_depth_std))
+    return tuple(write_array(folder / name, values, force=force) for names, depth, std in maps for name, values in zip(names, (depth, std)))
 
 
 # ------------------------------------------------------------------ two synchronised videos
