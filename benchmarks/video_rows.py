@@ -63,15 +63,18 @@ def turned_row(scene, turn_deg):
     return frames, cam, orientations, crop
 
 
-def score(scene, levels, turn_deg=0.0):
-    """Points, median relative error, bad-1px (all, off the depth steps) and ms per frame at the reference view."""
+def row_video(scene, turn_deg):
+    """The row's frames, camera, motion (``depth_from_video`` keywords) and the crop of its truth; turned when ``turn_deg``."""
     if turn_deg:
         frames, cam, orientations, crop = turned_row(scene, turn_deg)
         positions = np.arange(len(frames))[:, None] * np.array([1.0, 0.0, 0.0])
-        motion = {"positions": positions, "orientations_rad": orientations}
-    else:
-        frames, cam, crop = list(scene.views), PinholeCamera(100.0, scene.shape[1], scene.shape[0]), (slice(None), slice(None))
-        motion = {"velocity": (1.0, 0.0, 0.0)}
+        return frames, cam, {"positions": positions, "orientations_rad": orientations}, crop
+    return list(scene.views), PinholeCamera(100.0, scene.shape[1], scene.shape[0]), {"velocity": (1.0, 0.0, 0.0)}, (slice(None), slice(None))
+
+
+def score(scene, levels, turn_deg=0.0):
+    """Points, median relative error, bad-1px (all, off the depth steps) and ms per frame at the reference view."""
+    frames, cam, motion, crop = row_video(scene, turn_deg)
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # behind-camera points at the borders of the single level's wrong answers
@@ -88,13 +91,7 @@ def score(scene, levels, turn_deg=0.0):
 def score_dense(scene, turn_deg=0.0):
     """Dense map of the reference's triple: cover, bad-1px, median relative error, median |error| / std, s per frame."""
     ref = scene.reference_index
-    if turn_deg:
-        frames, cam, orientations, crop = turned_row(scene, turn_deg)
-        positions = np.arange(len(frames))[:, None] * np.array([1.0, 0.0, 0.0])
-        motion = {"positions": positions, "orientations_rad": orientations}
-    else:
-        frames, cam, crop = list(scene.views), PinholeCamera(100.0, scene.shape[1], scene.shape[0]), (slice(None), slice(None))
-        motion = {"velocity": (1.0, 0.0, 0.0)}
+    frames, cam, motion, crop = row_video(scene, turn_deg)
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the edge points' own notes
