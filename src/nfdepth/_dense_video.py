@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._derotation import derotate, derotation_maps, moves_pixels
+from ._derotation import derotate, derotation_maps, grid_rays, moves_pixels
 from .camera import PinholeCamera
 from .stereo import static_stereo
 
@@ -83,8 +83,7 @@ def _rays(camera: PinholeCamera, rotation, rows, cols) -> list:
     """``rotation @ (x, y, 1)`` for the normalised image coordinates of ``rows`` x ``cols`` (three arrays)."""
     x = (np.asarray(cols, dtype=float) - camera.cx_px) / camera.focal_px
     y = (np.asarray(rows, dtype=float) - camera.cy_px) / camera.focal_px
-    r = np.asarray(rotation, dtype=float)
-    return [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]
+    return grid_rays(rotation, x, y)
 
 
 def _canvas(camera: PinholeCamera, to_rect) -> tuple[int, int, float, float]:

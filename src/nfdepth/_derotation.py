@@ -29,6 +29,18 @@ from .camera import PinholeCamera
 STILL_PX = 1e-6
 
 
+def grid_rays(rotation, x, y) -> list[np.ndarray]:
+    """``rotation @ (x, y, 1)`` on the grid of normalised coordinates ``x`` (columns) by ``y`` (rows).
+
+    Three ``(len(y), len(x))`` float64 arrays, the ray's components, built
+    by columns of ``rotation`` (no ``(H, W, 3)`` temporary).
+    """
+    r = np.asarray(rotation, dtype=np.float64)
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    return [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]
+
+
 def derotation_maps(camera: PinholeCamera, rotation, *, grid=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where each pixel of a frame turned to another orientation reads the frame as taken.
 
@@ -50,9 +62,7 @@ def derotation_maps(camera: PinholeCamera, rotation, *, grid=None) -> tuple[np.n
     out_h, out_w, out_cx, out_cy = (h, w, camera.cx_px, camera.cy_px) if grid is None else grid
     x = (np.arange(out_w, dtype=np.float64) - out_cx) / f
     y = (np.arange(out_h, dtype=np.float64) - out_cy) / f
-    r = np.asarray(rotation, dtype=np.float64)
-    # R (x, y, 1) for every pixel, by columns of R (no (H, W, 3) temporary)
-    turned = [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]
+    turned = grid_rays(rotation, x, y)
     ahead = turned[2] > 0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         col = np.where(ahead, camera.cx_px + f * turned[0] / turned[2], -1.0)
