@@ -19,6 +19,10 @@ the pipeline positions and orientations, and the score is that of the
 cropped truth. Only the frames up to the one after the reference are used
 (the reference's depth does not depend on later frames).
 
+``--drop-frame`` leaves out the frame after the reference, as a video that
+dropped it: the reference's triple has steps of one and two views (each
+outer frame is warped by its own step, :mod:`nfdepth._translating_pyramid`).
+
 ``--dense`` scores the dense map of the reference's triple instead
 (``depth_from_video(..., dense=True)``, :mod:`nfdepth._dense_video`): the
 share of the pixels with truth it covers, bad-1px and the median relative
@@ -63,24 +67,34 @@ def turned_row(scene, turn_deg):
     return frames, cam, orientations, crop
 
 
-def row_video(scene, turn_deg):
-    """The row's frames, camera, motion (``depth_from_video`` keywords) and the crop of its truth; turned when ``turn_deg``."""
+def row_video(scene, turn_deg, drop_frame=False):
+    """The row's frames, camera, motion (``depth_from_video`` keywords) and the crop of its truth; turned when ``turn_deg``.
+
+    ``drop_frame`` leaves out the frame after the reference (the positions say so).
+    """
     if turn_deg:
         frames, cam, orientations, crop = turned_row(scene, turn_deg)
-        positions = np.arange(len(frames))[:, None] * np.array([1.0, 0.0, 0.0])
-        return frames, cam, {"positions": positions, "orientations_rad": orientations}, crop
-    return list(scene.views), PinholeCamera(100.0, scene.shape[1], scene.shape[0]), {"velocity": (1.0, 0.0, 0.0)}, (slice(None), slice(None))
+        motion = {"orientations_rad": orientations}
+    else:
+        frames, cam, crop = list(scene.views), PinholeCamera(100.0, scene.shape[1], scene.shape[0]), (slice(None), slice(None))
+        motion = {}
+    if not turn_deg and not drop_frame:
+        return frames, cam, {"velocity": (1.0, 0.0, 0.0)}, crop
+    keep = [k for k in range(len(frames)) if not (drop_frame and k == scene.reference_index + 1)]
+    motion = {name: value[keep] for name, value in motion.items()}
+    motion["positions"] = np.asarray(keep, dtype=float)[:, None] * np.array([1.0, 0.0, 0.0])
+    return [frames[k] for k in keep], cam, motion, crop
 
 
-def score(scene, levels, turn_deg=0.0):
+def score(scene, levels, turn_deg=0.0, drop_frame=False):
     """Points, median relative error, bad-1px (all, off the depth steps) and ms per frame at the reference view."""
-    frames, cam, motion, crop = row_video(scene, turn_deg)
+    frames, cam, motion, crop = row_video(scene, turn_deg, drop_frame)
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # behind-camera points at the borders of the single level's wrong answers
         out = {r.index: r for r in depth_from_video(frames, camera=cam, levels=levels, **motion)}
     ms = 1e3 * (time.perf_counter() - start) / max(len(out), 1)
-    rho = out[scene.reference_index].inverse_depth
+    rho = out[scene.reference_index].inverse_depth  # a dropped frame comes after it: the reference keeps its index
     disparity, valid = scene.disparity[crop], scene.valid[crop]
     m = np.isfinite(rho) & valid
     err = np.abs(cam.focal_px * rho[m] - disparity[m])  # a unit step per frame: f rho is the disparity
@@ -88,10 +102,10 @@ def score(scene, levels, turn_deg=0.0):
     return m.sum(), np.median(err / disparity[m]), np.mean(err > 1.0), np.mean(err[off] > 1.0), ms
 
 
-def score_dense(scene, turn_deg=0.0):
+def score_dense(scene, turn_deg=0.0, drop_frame=False):
     """Dense map of the reference's triple: cover, bad-1px, median relative error, median |error| / std, s per frame."""
     ref = scene.reference_index
-    frames, cam, motion, crop = row_video(scene, turn_deg)
+    frames, cam, motion, crop = row_video(scene, turn_deg, drop_frame)
     start = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the edge points' own notes
@@ -108,23 +122,26 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", metavar="DIR", help="data root (default: $NFDEPTH_DATA, ../shared/data, ...)")
     parser.add_argument("--turn-deg-per-frame", type=float, default=0.0, metavar="D", help="the camera turns about Y by D degrees per frame as well")
+    parser.add_argument("--drop-frame", action="store_true", help="leave out the frame after the reference (steps of one and two views)")
     parser.add_argument("--dense", action="store_true", help="score the dense map of the reference's triple instead")
     args = parser.parse_args(argv)
+    if args.drop_frame and args.turn_deg_per_frame:
+        parser.error("--drop-frame and --turn-deg-per-frame do not go together (a turned row ends at the frame after the reference)")
     root = datasets.data_root(args.data)
     if args.dense:
         print("| scene | dense cover | bad-1px | median rel | median abs(error) / std | s/frame |")
         print("| --- | --- | --- | --- | --- | --- |")
         for name in SCENES:
-            cover, bad, med, z, seconds = score_dense(datasets.load_scene(name, root), args.turn_deg_per_frame)
+            cover, bad, med, z, seconds = score_dense(datasets.load_scene(name, root), args.turn_deg_per_frame, args.drop_frame)
             print(f"| {name} | {100 * cover:.1f} % | {100 * bad:.2f} % | {100 * med:.2f} % | {z:.2f} | {seconds:.2f} |", flush=True)
         return 0
     print("| scene | views | truth median px/frame | levels | points | median rel | bad-1px | bad-1px off steps | ms/frame |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for name in SCENES:
         scene = datasets.load_scene(name, root)
-        views = scene.reference_index + 2 if args.turn_deg_per_frame else len(scene.views)
+        views = (scene.reference_index + 2 if args.turn_deg_per_frame else len(scene.views)) - args.drop_frame
         for levels, label in ((None, "auto"), (1, "1 (paper)")):
-            n, med, bad, bad_off, ms = score(scene, levels, args.turn_deg_per_frame)
+            n, med, bad, bad_off, ms = score(scene, levels, args.turn_deg_per_frame, args.drop_frame)
             motion = np.median(scene.disparity[scene.valid])
             print(f"| {name} | {views} | {motion:.1f} | {label} | {n} | {100 * med:.2f} % | {100 * bad:.1f} % | {100 * bad_off:.1f} % | {ms:.0f} |", flush=True)
     return 0

@@ -93,6 +93,21 @@ def test_a_sideways_camera_gives_static_stereo_of_its_triple():
     np.testing.assert_array_equal(r.dense_inverse_depth_std, (plain.uncertainty.astype(float) / CAMERA.focal_px).astype(np.float32))
 
 
+@pytest.mark.parametrize("along", [(0.0, 2.0, 1.0), (1.0, 0.0, 2.0), (0.0, 0.0, 1.0), (0.0, 1.0, 3.0)], ids=["reverses-after", "reverses-before", "paused", "dropped-frame"])
+def test_the_views_go_in_their_order_along_the_path(along):
+    """A camera that reverses within its triple, pauses for a frame, or drops one: the views in their order along the path
+    (the middle one at an end of the row, or two views). Measured: cover 0.99-1.00, median 3.2-3.8 %, >10 % off 0.9-1.5 %,
+    as with equal steps (1.00, 3.4 %, 0.8 %); before, the first three gave NaN maps."""
+    rng = np.random.default_rng(1)
+    shots = [textured_world_frame(CAMERA, np.eye(3), (x, 0.0, 0.0), rng=rng) for x in along]
+    (r,) = _dense([s[0] for s in shots], np.outer(along, (1.0, 0.0, 0.0)), np.zeros((3, 3)))
+    cover, median, wrong, z = _scores(r, shots[1][1])
+    assert cover > 0.95
+    assert median < 0.05
+    assert wrong < 0.03
+    assert 0.4 < z < 1.35
+
+
 def test_dense_maps_are_per_triple_and_absent_without_dense():
     frames, depths, positions, orientations = _film((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), n_frames=5)
     out = _dense(frames, positions, orientations)

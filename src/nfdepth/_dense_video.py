@@ -25,6 +25,12 @@ epipolar lines radiate from the focus of expansion, which no row of views
 reproduces. The edge points (eq. 4, any direction of motion) are measured
 as before.
 
+The views go to static stereo in their order along the path, whatever
+their order in time: a camera that reverses within the triple (the middle
+frame beyond one of its neighbours) has the middle view at an end of the
+row, and an outer frame taken where the middle one was (the camera paused)
+is left out, leaving two views.
+
 The dense map is pixel-centred (pixel ``(r, c)`` at its centre, as
 :class:`nfdepth.stereo.StereoResult`), unlike the edge-point and fused maps
 of :mod:`nfdepth.video`, which are on the stencil's cell grid.
@@ -46,6 +52,8 @@ from .stereo import static_stereo
 MAX_CANVAS = 2.0
 #: A path closer than this to the optical axis gives no dense map (no row of views from it).
 MIN_SIDEWAYS_DEG = 5.0
+#: An outer frame nearer the middle one than this share of the path is taken where the middle one was.
+_SAME_PLACE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -127,13 +135,17 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     s1 = float(along @ (p1 - p0))
     off_line = float(np.linalg.norm(p1 - p0 - s1 * along)) / (length / 2.0)
     rect = rectifying_orientation(rotations[1], path)
-    if rect is None or not 0.0 < s1 < length:
+    if rect is None:
         return DenseTriple(nan, nan.copy(), 0.0, off_line)
+    # the views in their order along the path; an outer one where the middle one is adds nothing
+    along_path = [0.0, s1, length]
+    order = sorted((j for j in range(3) if j == 1 or abs(along_path[j] - s1) > _SAME_PLACE * length), key=along_path.__getitem__)
     to_rect = rect.T @ np.asarray(rotations[1], dtype=float)  # a middle-frame ray in rectified axes
     grid = _canvas(camera, to_rect)
     as_taken = grid == (h, w, camera.cx_px, camera.cy_px)
     views, seen = [], None
-    for j, frame in enumerate(frames):
+    for j in order:
+        frame = frames[j]
         turn = np.asarray(rotations[j], dtype=float).T @ rect
         if as_taken and not moves_pixels(camera, turn):
             views.append(np.asarray(frame, dtype=np.float32))
@@ -145,7 +157,7 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     with warnings.catch_warnings():
         # static stereo's own notes (few edge points, behind the camera) say nothing a video run does not report
         warnings.simplefilter("ignore", UserWarning)
-        res = static_stereo(views, reference=1, positions=[0.0, s1, length], noise_std=noise_std, threads=threads)
+        res = static_stereo(views, reference=order.index(1), positions=[along_path[j] for j in order], noise_std=noise_std, threads=threads)
     f = camera.focal_px
     rho_rect = res.disparity.astype(np.float64) / f  # px per unit of position = f / Z
     std_rect = res.uncertainty.astype(np.float64) / f
