@@ -108,6 +108,20 @@ def test_the_views_go_in_their_order_along_the_path(along):
     assert 0.4 < z < 1.35
 
 
+def test_an_outer_frame_that_hardly_moves_is_left_out():
+    """Outer frames 0.2 and 2 units from the middle one (0.3-0.5 px and 3.4-5 px of motion): static stereo's candidate
+    steps follow the nearest view, so the near frame is left out. Measured: median 1.6 %, 0.7 % of the pixels more
+    than 10 % off, as with the far frame alone; with it, 14 % and 77 %."""
+    rng = np.random.default_rng(1)
+    along = (-0.2, 0.0, 2.0)
+    shots = [textured_world_frame(CAMERA, np.eye(3), (x, 0.0, 0.0), rng=rng) for x in along]
+    (r,) = _dense([s[0] for s in shots], np.outer(along, (1.0, 0.0, 0.0)), np.zeros((3, 3)))
+    cover, median, wrong, _ = _scores(r, shots[1][1])
+    assert cover > 0.9
+    assert median < 0.04
+    assert wrong < 0.03
+
+
 def test_dense_maps_are_per_triple_and_absent_without_dense():
     frames, depths, positions, orientations = _film((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), n_frames=5)
     out = _dense(frames, positions, orientations)

@@ -33,7 +33,12 @@ warped by its own displacement ``t_j = P_j - P_k`` (camera axes), so the
 prior's motion ``rho A(x) (-t_j)`` leaves only its error in either frame. The
 central difference of the warped frames then reads that error against the
 central step ``T = (t_k+1 - t_k-1) / 2``, as with equal steps: the update's
-gradient ``grad I . a`` and eq. 4's baseline are ``T``'s. Warped by ``+/- T``
+gradient ``grad I . a`` and eq. 4's baseline are ``T``'s. A step along the
+optical axis changes the point's depth in that frame to ``Z - t_jz``, so
+the warp is eq. 1 for the finite step, ``rho A(x) (-t_j) / (1 - rho t_jz)``
+(to first order, unequal steps along (1, 0, 1) left a median bias of up
+to 2.7 %), and the residual bound counts the motion of the outer frame
+farthest from the middle one (:func:`outer_reach`). Warped by ``+/- T``
 instead, the outer frames kept ``(t_k+1 + t_k-1) / 2`` of the prior's motion
 each, so the stencil's temporal derivative sat that far from its spatial
 gradient (Middlebury 2005 rows with steps of one and two views: median
@@ -94,7 +99,7 @@ def flow_directions(camera: PinholeCamera, translation, shape, *, scale: float =
 
 
 def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, shape, *, scale: float = 1.0):
-    """Where frames ``k-1`` and ``k+1`` see a point per unit of :func:`dense_prior`'s ``rho f |V|``: ``((a_col, a_row), (a_col, a_row))``.
+    """Where frames ``k-1`` and ``k+1`` see a point, per unit of :func:`dense_prior`'s ``rho f |V|``: ``((a_col, a_row, k_z), (a_col, a_row, k_z))``.
 
     ``translation`` is the central relative motion ``V = -T`` (as for
     :func:`flow_directions`). ``outer_steps`` holds the camera's displacement
@@ -102,22 +107,35 @@ def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, shape
     middle frame's axes; None means equal steps, ``(-T, T)``. Frame ``j``'s
     field is ``A(x) (-t_j) / (f |V|)``: ``-a`` and ``a`` for equal steps
     (exactly, so equal steps give the same warps as before), zero for an
-    outer frame taken where the middle one was.
+    outer frame taken where the middle one was. ``k_z = t_jz / (f |V|)``:
+    a point at ``rho f |V| = r`` moves by ``r a_j / (1 - r k_z)`` (eq. 1 for
+    a finite step: its depth in frame ``j`` is ``Z - t_jz``).
     """
     a_col, a_row = flow_directions(camera, translation, shape, scale=scale)
-    if outer_steps is None:
-        return (-a_col, -a_row), (a_col, a_row)
     central = _magnitude(translation)
-    fields = []
-    for step in outer_steps:
-        length = _magnitude(step)
-        if length == 0.0:
-            fields.append((np.zeros_like(a_col), np.zeros_like(a_row)))
-            continue
-        o_col, o_row = flow_directions(camera, -np.asarray(step, dtype=float), shape, scale=scale)
-        ratio = np.float32(length / central)
-        fields.append((o_col * ratio, o_row * ratio))
-    return fields[0], fields[1]
+    if outer_steps is None:
+        t_next = -np.asarray(translation, dtype=float)
+        outer_steps = (-t_next, t_next)
+        fields = [(-a_col, -a_row), (a_col, a_row)]
+    else:
+        fields = []
+        for step in outer_steps:
+            length = _magnitude(step)
+            if length == 0.0:
+                fields.append((np.zeros_like(a_col), np.zeros_like(a_row)))
+                continue
+            o_col, o_row = flow_directions(camera, -np.asarray(step, dtype=float), shape, scale=scale)
+            ratio = np.float32(length / central)
+            fields.append((o_col * ratio, o_row * ratio))
+    # t_jz per unit of rho f |V|: the point's depth in frame j is Z - t_jz (its motion is rho a_j / (1 - rho t_jz))
+    return tuple((*field, float(step[2]) / (camera.focal_px * central)) for field, step in zip(fields, outer_steps))
+
+
+def outer_reach(translation, outer_steps) -> float:
+    """The farthest outer frame's displacement over the central step ``|V|`` (1 for equal steps, more when the camera reverses)."""
+    if outer_steps is None:
+        return 1.0
+    return max(_magnitude(step) for step in outer_steps) / _magnitude(translation)
 
 
 def warp_outer_frames(frames, rho, directions):
@@ -130,9 +148,12 @@ def warp_outer_frames(frames, rho, directions):
     cols = np.arange(w, dtype=np.float32)[None, :]
     rows = np.arange(h, dtype=np.float32)[:, None]
     out, inside = [], np.ones((h, w), bool)
-    for frame, (a_col, a_row) in zip((frames[0], frames[2]), directions):
-        map_c = (cols + rho * a_col).astype(np.float32)
-        map_r = (rows + rho * a_row).astype(np.float32)
+    for frame, (a_col, a_row, k_z) in zip((frames[0], frames[2]), directions):
+        # the finite step's depth change (k_z = 0 for a sideways step: rho itself, bit for bit); a point
+        # the outer camera passed (1 - rho k_z <= 0) is read as if 20 times nearer, an edge of the frame at most
+        moved = rho if k_z == 0.0 else rho / np.maximum(np.float32(1.0) - rho * np.float32(k_z), np.float32(0.05))
+        map_c = (cols + moved * a_col).astype(np.float32)
+        map_r = (rows + moved * a_row).astype(np.float32)
         out.append(remap_linear(frame, map_c, map_r))
         inside &= (map_c >= 0) & (map_c <= w - 1) & (map_r >= 0) & (map_r <= h - 1)
     return out[0], out[1], inside
@@ -155,7 +176,7 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, oute
         a_col, a_row = flow_directions(camera, translation, (h, w), scale=2.0**level)
         directions = outer_flow_directions(camera, translation, outer_steps, (h, w), scale=2.0**level)
         # a step moves a point by at most 1 px of this level (in the outer frame that moves most)
-        fastest = np.maximum(np.hypot(*directions[0]), np.hypot(*directions[1]))
+        fastest = np.maximum(np.hypot(*directions[0][:2]), np.hypot(*directions[1][:2]))
         limit = (1.0 / np.maximum(np.maximum(np.hypot(a_col, a_row), fastest), np.float32(1e-12))).astype(np.float32)
         rho = np.zeros((h, w), np.float32) if rho is None else cv2.resize(rho, (w, h), interpolation=cv2.INTER_LINEAR)
         g_col = cv2.Sobel(smoothed[1], cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)
@@ -235,7 +256,9 @@ def edge_depth_coarse_to_fine(
     jj = np.clip(np.floor(res.cols).astype(np.int64), 0, prior.shape[1] - 1)
     outside = ~inside[ii, jj]
     inv.reason[ok & outside] = Reason.NO_DATA
-    inv.reason[(inv.reason == Reason.OK) & ~(np.abs(res.delta_vn) <= max_residual_px)] = Reason.UNCERTAIN
+    # the residual is per central step; the outer frame farthest from the middle one moved reach times as far
+    reach = outer_reach(translation, outer_steps)
+    inv.reason[(inv.reason == Reason.OK) & ~(np.abs(res.delta_vn) * reach <= max_residual_px)] = Reason.UNCERTAIN
     if edge_step_px > 0:
         # beside a depth step one side of the edge is hidden in an outer frame and the
         # truth of the edge's pixel may be either surface; there the smooth prior errs most

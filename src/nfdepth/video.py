@@ -92,7 +92,7 @@ from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_triple
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
-from ._translating_pyramid import edge_depth_coarse_to_fine
+from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
 from .depth import Reason
@@ -875,15 +875,16 @@ def depth_from_video(
                     blind_frames.append(k)
                     seen = min(seen, float(whole.mean()))
                 mask = mask & whole[: mask.shape[0], : mask.shape[1]]
-            # the motion the triple's stencil saw (after warping by the prior, with levels > 1)
-            shift = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
+            # the motion the triple's stencil saw (after warping by the prior, with levels > 1), in the outer frame
+            # farthest from the middle one (the flow is per central step: a reversing camera moves farther)
+            shift = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"]) * outer_reach(-step_cam, outer)
             if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
             if levels == 1 and outer is not None:
                 # the single level's stencil takes the frames as equally spaced: its temporal derivative
                 # sits half the steps' difference away from the middle frame's gradient
-                lopsided = shift * float(np.linalg.norm(outer[0] + outer[1])) / (2.0 * baseline)
+                lopsided = shift * float(np.linalg.norm(outer[0] + outer[1])) / (2.0 * baseline * outer_reach(-step_cam, outer))
                 if lopsided > _UNEVEN_PX:
                     uneven_frames.append(k)
                     unevenest = max(unevenest, lopsided)
