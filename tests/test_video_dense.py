@@ -93,15 +93,20 @@ def test_a_sideways_camera_gives_static_stereo_of_its_triple():
     np.testing.assert_array_equal(r.dense_inverse_depth_std, (plain.uncertainty.astype(float) / CAMERA.focal_px).astype(np.float32))
 
 
+def _sideways_triple_scores(along):
+    """``_scores`` of the dense map of three frames from ``(x, 0, 0)``, ``x`` in ``along`` (not turning)."""
+    rng = np.random.default_rng(1)
+    shots = [textured_world_frame(CAMERA, np.eye(3), (x, 0.0, 0.0), rng=rng) for x in along]
+    (r,) = _dense([s[0] for s in shots], np.outer(along, (1.0, 0.0, 0.0)), np.zeros((3, 3)))
+    return _scores(r, shots[1][1])
+
+
 @pytest.mark.parametrize("along", [(0.0, 2.0, 1.0), (1.0, 0.0, 2.0), (0.0, 0.0, 1.0), (0.0, 1.0, 3.0)], ids=["reverses-after", "reverses-before", "paused", "dropped-frame"])
 def test_the_views_go_in_their_order_along_the_path(along):
     """A camera that reverses within its triple, pauses for a frame, or drops one: the views in their order along the path
     (the middle one at an end of the row, or two views). Measured: cover 0.99-1.00, median 3.2-3.8 %, >10 % off 0.9-1.5 %,
     as with equal steps (1.00, 3.4 %, 0.8 %); before, the first three gave NaN maps."""
-    rng = np.random.default_rng(1)
-    shots = [textured_world_frame(CAMERA, np.eye(3), (x, 0.0, 0.0), rng=rng) for x in along]
-    (r,) = _dense([s[0] for s in shots], np.outer(along, (1.0, 0.0, 0.0)), np.zeros((3, 3)))
-    cover, median, wrong, z = _scores(r, shots[1][1])
+    cover, median, wrong, z = _sideways_triple_scores(along)
     assert cover > 0.95
     assert median < 0.05
     assert wrong < 0.03
@@ -112,11 +117,7 @@ def test_an_outer_frame_that_hardly_moves_is_left_out():
     """Outer frames 0.2 and 2 units from the middle one (0.3-0.5 px and 3.4-5 px of motion): static stereo's candidate
     steps follow the nearest view, so the near frame is left out. Measured: median 1.6 %, 0.7 % of the pixels more
     than 10 % off, as with the far frame alone; with it, 14 % and 77 %."""
-    rng = np.random.default_rng(1)
-    along = (-0.2, 0.0, 2.0)
-    shots = [textured_world_frame(CAMERA, np.eye(3), (x, 0.0, 0.0), rng=rng) for x in along]
-    (r,) = _dense([s[0] for s in shots], np.outer(along, (1.0, 0.0, 0.0)), np.zeros((3, 3)))
-    cover, median, wrong, _ = _scores(r, shots[1][1])
+    cover, median, wrong, _ = _sideways_triple_scores((-0.2, 0.0, 2.0))
     assert cover > 0.9
     assert median < 0.04
     assert wrong < 0.03
