@@ -166,8 +166,8 @@ def test_equal_steps_keep_the_central_warp():
     cam = PinholeCamera(100.0, 40, 30)
     v = np.array([-0.3, 0.1, 0.05])  # V = -T
     central = flow_directions(cam, v, (30, 40))
-    given = outer_flow_directions(cam, v, (v, -v), (30, 40))  # t_k-1 = -T = V, t_k+1 = T = -V
-    equal = outer_flow_directions(cam, v, None, (30, 40))
+    given = outer_flow_directions(cam, v, (v, -v), central)  # t_k-1 = -T = V, t_k+1 = T = -V
+    equal = outer_flow_directions(cam, v, None, central)
     for (a, b, kz), (c, d, kz_equal) in zip(given, equal):
         np.testing.assert_array_equal(a, c)
         np.testing.assert_array_equal(b, d)
@@ -177,7 +177,7 @@ def test_equal_steps_keep_the_central_warp():
     # k_z = t_jz / (f |V|): t_k+1 = -V
     assert equal[1][2] == pytest.approx(-0.05 / (100.0 * np.linalg.norm(v)))
     # an outer frame taken where the middle one was does not move
-    paused = outer_flow_directions(cam, v, (np.zeros(3), -2.0 * v), (30, 40))
+    paused = outer_flow_directions(cam, v, (np.zeros(3), -2.0 * v), central)
     assert not np.any(paused[0][0]) and not np.any(paused[0][1]) and paused[0][2] == 0.0
     np.testing.assert_allclose(paused[1][0], 2.0 * central[0], rtol=1e-6)
     # positions 0.1, 0.2, 0.3: steps of 0.1 to float64 rounding

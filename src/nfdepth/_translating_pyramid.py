@@ -98,11 +98,12 @@ def flow_directions(camera: PinholeCamera, translation, shape, *, scale: float =
     return a_col, a_row
 
 
-def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, shape, *, scale: float = 1.0):
+def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, central_field, *, scale: float = 1.0):
     """Where frames ``k-1`` and ``k+1`` see a point, per unit of :func:`dense_prior`'s ``rho f |V|``: ``((a_col, a_row, k_z), (a_col, a_row, k_z))``.
 
-    ``translation`` is the central relative motion ``V = -T`` (as for
-    :func:`flow_directions`). ``outer_steps`` holds the camera's displacement
+    ``translation`` is the central relative motion ``V = -T`` and
+    ``central_field`` its :func:`flow_directions` ``(a_col, a_row)`` at
+    ``scale``. ``outer_steps`` holds the camera's displacement
     from the middle frame to each outer frame, ``(t_k-1, t_k+1)`` in the
     middle frame's axes; None means equal steps, ``(-T, T)``. Frame ``j``'s
     field is ``A(x) (-t_j) / (f |V|)``: ``-a`` and ``a`` for equal steps
@@ -111,7 +112,7 @@ def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, shape
     a point at ``rho f |V| = r`` moves by ``r a_j / (1 - r k_z)`` (eq. 1 for
     a finite step: its depth in frame ``j`` is ``Z - t_jz``).
     """
-    a_col, a_row = flow_directions(camera, translation, shape, scale=scale)
+    a_col, a_row = central_field
     central = _magnitude(translation)
     if outer_steps is None:
         t_next = -np.asarray(translation, dtype=float)
@@ -124,7 +125,7 @@ def outer_flow_directions(camera: PinholeCamera, translation, outer_steps, shape
             if length == 0.0:
                 fields.append((np.zeros_like(a_col), np.zeros_like(a_row)))
                 continue
-            o_col, o_row = flow_directions(camera, -np.asarray(step, dtype=float), shape, scale=scale)
+            o_col, o_row = flow_directions(camera, -np.asarray(step, dtype=float), a_col.shape, scale=scale)
             ratio = np.float32(length / central)
             fields.append((o_col * ratio, o_row * ratio))
     # t_jz per unit of rho f |V|: the point's depth in frame j is Z - t_jz (its motion is rho a_j / (1 - rho t_jz))
@@ -174,7 +175,7 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, oute
         smoothed = [gaussian_smooth(f, sigma_px=_SIGMA_PX) for f in pyramid[level]]
         h, w = smoothed[1].shape
         a_col, a_row = flow_directions(camera, translation, (h, w), scale=2.0**level)
-        directions = outer_flow_directions(camera, translation, outer_steps, (h, w), scale=2.0**level)
+        directions = outer_flow_directions(camera, translation, outer_steps, (a_col, a_row), scale=2.0**level)
         # a step moves a point by at most 1 px of this level (in the outer frame that moves most)
         fastest = np.maximum(np.hypot(*directions[0][:2]), np.hypot(*directions[1][:2]))
         limit = (1.0 / np.maximum(np.maximum(np.hypot(a_col, a_row), fastest), np.float32(1e-12))).astype(np.float32)
@@ -231,7 +232,7 @@ def edge_depth_coarse_to_fine(
     translation = -baseline * direction
     prior = dense_prior(window, camera, translation, levels=levels, outer_steps=outer_steps)  # rho f |V|
     a_col, a_row = flow_directions(camera, translation, prior.shape)
-    directions = outer_flow_directions(camera, translation, outer_steps, prior.shape)
+    directions = outer_flow_directions(camera, translation, outer_steps, (a_col, a_row))
     before, after, inside = warp_outer_frames(window, prior, directions)
     with warnings.catch_warnings():
         # the residual's sign is the prior's error: negative values are no mistake

@@ -877,14 +877,15 @@ def depth_from_video(
                 mask = mask & whole[: mask.shape[0], : mask.shape[1]]
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1), in the outer frame
             # farthest from the middle one (the flow is per central step: a reversing camera moves farther)
-            shift = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"]) * outer_reach(-step_cam, outer)
+            median = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
+            shift = median * outer_reach(-step_cam, outer)
             if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
             if levels == 1 and outer is not None:
                 # the single level's stencil takes the frames as equally spaced: its temporal derivative
                 # sits half the steps' difference away from the middle frame's gradient
-                lopsided = shift * float(np.linalg.norm(outer[0] + outer[1])) / (2.0 * baseline * outer_reach(-step_cam, outer))
+                lopsided = median * float(np.linalg.norm(outer[0] + outer[1])) / (2.0 * baseline)
                 if lopsided > _UNEVEN_PX:
                     uneven_frames.append(k)
                     unevenest = max(unevenest, lopsided)
