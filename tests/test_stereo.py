@@ -158,8 +158,9 @@ def test_positions_in_any_unit_give_the_same_map_per_unit(scale, positions):
     np.testing.assert_array_equal(np.isnan(scaled.disparity), np.isnan(base.disparity))
     ok = np.isfinite(base.disparity)
     assert ok.mean() > 0.8
-    # equal but for the rounding of the scaled positions (0.15 - 0.05 != 0.1): 1e-4 px
-    np.testing.assert_allclose(scaled.disparity[ok] * scale, base.disparity[ok], atol=1e-4)
+    # equal but for the rounding of the scaled positions (0.15 - 0.05 != 0.1), which the
+    # sub-sample fit of the finer candidates of (0, 1, 3) turns into up to 1.1e-4 px
+    np.testing.assert_allclose(scaled.disparity[ok] * scale, base.disparity[ok], atol=2e-4)
     np.testing.assert_allclose(scaled.uncertainty[ok] * scale, base.uncertainty[ok], rtol=1e-3, atol=1e-4)
     np.testing.assert_allclose(np.multiply(scaled.search_range_px, scale), base.search_range_px)
     given = static_stereo(views, reference=1, positions=[scale * p for p in positions], disparity_range_px=(0.0, 6.0 / scale))
@@ -732,9 +733,12 @@ def test_numba_streaming_wta_matches_full_volume():
         np.testing.assert_array_equal(c2_s, c2)
 
 
-@pytest.mark.parametrize("positions", [(0, 1, 2), (0, 1, 2, 3, 4), (0.0, 1.3, 2.0)])
+@pytest.mark.parametrize("positions", [(0, 1, 2), (0, 1, 2, 3, 4), (0, 1, 3), (0, 2, 3, 4, 5), (0.0, 1.3, 2.0)])
 def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
     """The fused numba cost volume gives the NumPy/OpenCV reference's winner, cost and uniqueness.
+
+    (0, 1, 3), (0, 2, 3, 4, 5) and (0, 1.3, 2) reach unequally far on the two
+    sides, so the views of both sides compete too (``_both_sides``).
 
     Integer positions put every candidate shift on the half-pixel grid, where
     cv2.warpAffine's 1/32-px fixed-point weights are exact: the two agree to

@@ -5,7 +5,9 @@ candidate list, per view ``k`` the truncated absolute difference of
 intensity and column gradient between the reference and view ``k`` shifted
 by ``t_k d_j``, averaged over the views on one side of the reference,
 aggregated by a guided filter (He et al. 2010; cost-volume filtering, Hosni
-et al. 2011); the better side wins (Kang & Szeliski 2001). The winner over
+et al. 2011); the better side wins (Kang & Szeliski 2001), and where the
+sides reach unequally far the mean over all views competes against
+one-sided costs raised by a penalty (:func:`_both_sides`). The winner over
 the candidates gets an equiangular sub-sample fit, and the best cost more
 than ``exclude_px`` away from it measures how unique the match is.
 
@@ -97,6 +99,35 @@ def _sides(t, ref):
     return [ks for ks in sides if ks]
 
 
+# Penalty of a one-sided cost against the views of both sides, per unit of
+# the sides' asymmetry (module docstring), in units of the truncated cost.
+_ONE_SIDE_PENALTY = 0.1
+
+
+def _both_sides(t, ref, full_cost):
+    """``(w_left, w_right, penalty)`` of the both-sides cost, or ``None`` where the sides reach equally far.
+
+    The one-sided minimum (Kang & Szeliski 2001) keeps a pixel that one side
+    cannot see; but where one side reaches much less far than the other its
+    shallow cost curve wins the minimum at unoccluded pixels too, and the
+    estimate has that side's precision. So the views of both sides (each side's
+    aggregated cost weighted by its number of views, i.e. the mean over all
+    views) compete as well, against one-sided costs raised by ``penalty =
+    _ONE_SIDE_PENALTY (1 - near / far) full_cost`` (``near``, ``far``: the two
+    sides' farthest positions; ``full_cost``: the cost of a mismatch). Rows that
+    reach as far on both sides keep the plain minimum.
+    """
+    sides = _sides(t, ref)
+    if len(sides) < 2:
+        return None
+    reach = sorted(max(abs(float(t[k])) for k in ks) for ks in sides)
+    asymmetry = 1.0 - reach[0] / reach[1]
+    if not asymmetry > 1e-6:
+        return None
+    n0, n1 = len(sides[0]), len(sides[1])
+    return np.float32(n0 / (n0 + n1)), np.float32(n1 / (n0 + n1)), np.float32(_ONE_SIDE_PENALTY * asymmetry * full_cost)
+
+
 def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
     """Aggregated one-sided matching cost of each constant disparity in ``candidates``, one slice at a time.
 
@@ -104,15 +135,18 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
     min(|G_k - G_ref|, tau_g)`` (intensity and column gradient, truncated;
     cost-volume filtering after Hosni et al. 2011), averaged over the views on
     one side of the reference, aggregated by the guided filter ``agg``; the
-    better side wins (Kang & Szeliski 2001). Yields one ``(h, w)`` slice per
+    better side wins (Kang & Szeliski 2001), or both sides where they reach
+    unequally far (:func:`_both_sides`). Yields one ``(h, w)`` slice per
     candidate, so the volume is never held in memory.
     """
     i_ref, g_ref = feats[ref]
     h, w = i_ref.shape
     cols = np.arange(w, dtype=np.float32)[None, :]
     sides = _sides(t, ref)
+    both = _both_sides(t, ref, (1.0 - alpha) * tau_i + alpha * tau_g)
     for dj in candidates:
         best = None
+        aggregated = []
         for ks in sides:
             acc = np.zeros((h, w), np.float32)
             cnt = np.zeros((1, w), np.float32)
@@ -126,7 +160,11 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
             mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
             a = agg(mean)
             a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf).astype(np.float32)
+            aggregated.append(a)
             best = a if best is None else np.minimum(best, a)
+        if both is not None:
+            w0, w1, penalty = both
+            best = np.minimum(best + penalty, w0 * aggregated[0] + w1 * aggregated[1])
         yield best
 
 
@@ -297,6 +335,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
     a1, a2 = f32(1.0 - alpha), f32(alpha)
     ti, tg = f32(tau_i), f32(tau_g)
     fill = f32((1.0 - alpha) * tau_i + alpha * tau_g)
+    both = _both_sides(t, ref, (1.0 - alpha) * tau_i + alpha * tau_g)
     add_r, sub_r = _box_index(h, r)
     add_c, sub_c = _box_index(w, r)
     init_c = _window_rows(0, w, r)
@@ -325,7 +364,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
                 for si, ks in enumerate(sides):
                     _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p[si], q[si], colcnt[si], yp, yq)
                 _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya, two)
-                _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, y0, y1, ya, two)
+                _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, y0, y1, ya, two, both)
             _nb_wta_chunk(buf, count, j0, m, idx, state)
         _nb_wta_result(idx, state, candidates, step, m, exclude_px, [o[y0:y1] for o in out])
 
@@ -578,11 +617,14 @@ if _njit is not None:
                 _nb_columns_step_sides(p, q, add_r[y] - src_off, sub_r[y] - src_off, colp0, colq0, colp1, colq1, two)
 
     @_jit
-    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, y_lo, y_hi, src_off, two):
+    def _nb_box_finish(a, b, guide, colcnt, init_r, init_c, add_r, sub_r, add_c, sub_c, inv_area, out, plane, y_lo, y_hi, src_off, two, mix):
         """The better side's guided-filter output ``box(a) guide + box(b)`` (inf in columns its views miss) into ``out[:, plane]``.
 
         Both sides in one loop (as :func:`_nb_box_coeffs`; side 1 only if
-        ``two``); side 1 wins only where its cost is lower. Image rows ``y_lo .. y_hi - 1`` (row ``y -
+        ``two``); side 1 wins only where its cost is lower. With ``mix =
+        (w0, w1, penalty)`` (:func:`_both_sides`; ``None``: the plain
+        minimum) the better side's cost plus ``penalty`` competes with ``w0
+        side0 + w1 side1``. Image rows ``y_lo .. y_hi - 1`` (row ``y -
         y_lo`` of ``out``); image row ``y`` is row ``y - src_off`` of ``a``
         and ``b``.
         """
@@ -608,8 +650,11 @@ if _njit is not None:
                     v1 = np.float32(sa1 * inv_area) * g + np.float32(sb1 * inv_area)
                     if cnt1[x] == 0:
                         v1 = inf
-                    if v1 < v:
-                        v = v1
+                    if mix is None:  # (numba compiles this case without the other branch)
+                        if v1 < v:
+                            v = v1
+                    else:
+                        v = min(min(v, v1) + mix[2], mix[0] * v + mix[1] * v1)
                     sa1 += cola1[xa] - cola1[xs]
                     sb1 += colb1[xa] - colb1[xs]
                 orow[x] = v

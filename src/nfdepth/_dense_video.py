@@ -54,9 +54,6 @@ MAX_CANVAS = 2.0
 MIN_SIDEWAYS_DEG = 5.0
 #: An outer frame nearer the middle one than this share of the path is taken where the middle one was.
 _SAME_PLACE = 1e-6
-#: An outer frame less than half as far from the middle one as the other, moving the middle
-#: frame's pixels a median of less than this (px), is left out of the dense map (:func:`_too_near`).
-NEAR_SHIFT_PX = 2.0
 
 
 @dataclass(frozen=True)
@@ -127,29 +124,6 @@ def _static_stereo(views, reference, positions, noise_std, threads):
         return static_stereo(views, reference=reference, positions=positions, noise_std=noise_std, threads=threads)
 
 
-def _too_near(res, positions, reference: int):
-    """Index of an outer view to leave out, or None: one less than half as far as the other that moves its pixels < NEAR_SHIFT_PX.
-
-    Static stereo's candidate steps are in px of the view nearest the
-    reference; a view that hardly moves sets them so coarse that the far
-    view's parallax is lost (the exact board-and-wall scene with outer
-    frames 0.4 and 2 units away, the near one moving its pixels 0.7-1 px:
-    median error 8.7 %, 37 % of the pixels more than 10 % off; the far view
-    alone: 1.6 %, 0.7 %).
-    """
-    if len(positions) != 3:
-        return None
-    distance = [abs(p - positions[reference]) for p in positions]
-    outer = [j for j in range(3) if j != reference]
-    near, far = sorted(outer, key=distance.__getitem__)
-    if distance[near] >= 0.5 * distance[far]:
-        return None
-    known = np.abs(res.disparity[np.isfinite(res.disparity)])
-    if known.size and float(np.median(known)) * distance[near] >= NEAR_SHIFT_PX:
-        return None
-    return near
-
-
 def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_std: float, threads: int | None = None) -> DenseTriple:
     """Dense inverse depth (and its std) of the middle frame of a triple (module docstring).
 
@@ -190,10 +164,6 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     positions = [along_path[j] for j in order]
     reference = order.index(1)
     res = _static_stereo(views, reference, positions, noise_std, threads)
-    near = _too_near(res, positions, reference)
-    if near is not None:  # measured from the far view alone
-        del views[near], positions[near]
-        res = _static_stereo(views, reference - (near < reference), positions, noise_std, threads)
     f = camera.focal_px
     rho_rect = res.disparity.astype(np.float64) / f  # px per unit of position = f / Z
     std_rect = res.uncertainty.astype(np.float64) / f
