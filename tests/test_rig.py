@@ -469,6 +469,8 @@ def test_load_rig_that_is_not_utf8(tmp_path, capsys, paper_pngs):
         load_rig(tmp_path)
     with pytest.raises(FileNotFoundError, match=rf"^cannot read poses file '{re.escape(str(tmp_path / 'p.csv'))}': no such file$"):
         load_poses(tmp_path / "p.csv")
+    with pytest.raises(FileNotFoundError, match=rf"^cannot read poses file '{re.escape(str(tmp_path))}': it is a directory$"):
+        load_poses(tmp_path)
 
 
 def test_dynamic_cli_refused_before_any_work(tmp_path, capsys, paper_pngs):

@@ -258,7 +258,7 @@ def load_poses(path) -> Poses:
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"cannot read poses file '{path}': no such file")
+        raise FileNotFoundError(f"cannot read poses file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
     try:
         with path.open(newline="") as fh:
             rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
