@@ -143,7 +143,8 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
     h, w = i_ref.shape
     cols = np.arange(w, dtype=np.float32)[None, :]
     sides = _sides(t, ref)
-    both = _both_sides(t, ref, (1.0 - alpha) * tau_i + alpha * tau_g)
+    mismatch = (1.0 - alpha) * tau_i + alpha * tau_g  # the cost of a view that matches nowhere
+    both = _both_sides(t, ref, mismatch)
     for dj in candidates:
         best = None
         aggregated = []
@@ -157,7 +158,7 @@ def _cost_slices(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha):
                 cg = np.minimum(np.abs(_shift_cols(feats[k][1], s) - g_ref), tau_g)
                 acc += np.where(ins, (1.0 - alpha) * ci + alpha * cg, 0.0)
                 cnt += ins
-            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), (1.0 - alpha) * tau_i + alpha * tau_g).astype(np.float32)
+            mean = np.where(cnt > 0, acc / np.maximum(cnt, 1.0), mismatch).astype(np.float32)
             a = agg(mean)
             a = np.where(np.broadcast_to(cnt > 0, (h, w)), a, np.inf).astype(np.float32)
             aggregated.append(a)
@@ -334,8 +335,9 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
     f32 = np.float32
     a1, a2 = f32(1.0 - alpha), f32(alpha)
     ti, tg = f32(tau_i), f32(tau_g)
-    fill = f32((1.0 - alpha) * tau_i + alpha * tau_g)
-    both = _both_sides(t, ref, (1.0 - alpha) * tau_i + alpha * tau_g)
+    mismatch = (1.0 - alpha) * tau_i + alpha * tau_g
+    fill = f32(mismatch)
+    both = _both_sides(t, ref, mismatch)
     add_r, sub_r = _box_index(h, r)
     add_c, sub_c = _box_index(w, r)
     init_c = _window_rows(0, w, r)
