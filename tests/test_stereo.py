@@ -676,23 +676,58 @@ def test_occluded_side_across_an_edge_along_its_normal():
     assert _occluded_side(d, img, rows, cols, 0.5, direction=(-normal[0], normal[1])).tolist() == [False, True]
 
 
-def test_streaming_wta_matches_full_volume():
-    """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones (3 px steps: the sub-sample fit too)."""
+def _uniqueness_cost(vol, cand, d, interleave):
+    """The best cost of the candidates more than 1 px from ``d`` (interleaved: of the even ones, the search's grid)."""
+    near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
+    if interleave:
+        near[1::2] = True
+    return np.min(np.where(near, np.inf, vol), axis=0)
+
+
+_WTA_VOLUMES = ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3), (9, 3.0))
+# interleaved: odd counts (the grid and the midpoints between), half steps
+_WTA_INTERLEAVED = ((41, 0.25), (7, 0.25), (9, 0.25), (3, 0.25), (31, 0.35), (25, 0.15), (9, 1.5))
+
+
+@pytest.mark.parametrize("interleave", [False, True])
+def test_streaming_wta_matches_full_volume(interleave):
+    """The slice-by-slice winner, its cost and the uniqueness cost equal the full-volume ones (3 px steps: the sub-sample fit too).
+
+    Interleaved, the winner and its uniqueness are those of the even
+    candidates alone, the plain search of that grid; only the sub-sample fit
+    reads the odd ones, and moves less than 3/8 of the grid's step from the
+    plain one."""
     from nfdepth._cost_volume import _streaming_wta, _wta_subpixel
 
     rng = np.random.default_rng(0)
-    for n, step in ((40, 0.5), (7, 0.5), (2, 0.5), (1, 0.5), (30, 0.7), (25, 0.3), (9, 3.0)):
+    for n, step in _WTA_INTERLEAVED if interleave else _WTA_VOLUMES:
         vol = rng.random((n, 12, 16)).astype(np.float32)
         vol[:, :2] = np.inf  # pixels no view sees
         vol[rng.random(vol.shape) < 0.05] = np.inf
         cand = np.arange(n) * step + 1.0
-        d, c0 = _wta_subpixel(vol, cand)
-        near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
-        c2 = np.min(np.where(near, np.inf, vol), axis=0)
-        d_s, c0_s, c2_s = _streaming_wta(iter(vol), cand, exclude_px=1.0)
+        d, c0 = _wta_subpixel(vol, cand, interleave=interleave)
+        d_s, c0_s, c2_s = _streaming_wta(iter(vol), cand, exclude_px=1.0, interleave=interleave)
         np.testing.assert_array_equal(d_s, d)
         np.testing.assert_array_equal(c0_s, c0)
-        np.testing.assert_array_equal(c2_s, c2)
+        np.testing.assert_array_equal(c2_s, _uniqueness_cost(vol, cand, d, interleave))
+        if interleave:
+            d_grid, c0_grid = _wta_subpixel(vol[::2], cand[::2])
+            np.testing.assert_array_equal(c0_s, c0_grid)
+            assert np.all(np.abs(d_s - d_grid)[np.isfinite(c0_s)] <= 0.375 * 2 * step + 1e-6)
+
+
+def test_interleaved_fit_averages_the_two_grids_of_a_clean_minimum():
+    """A V-shaped cost about 1.3 (grid 0, 0.5, ..; midpoints 0.25, ..): both grids' equiangular fits are exact, so is their mean;
+    a second minimum on the midpoints' grid (another surface) or fits half a step apart leave the grid's own fit."""
+    from nfdepth._cost_volume import _wta_subpixel
+
+    cand = np.arange(0.0, 4.01, 0.25)
+    vol = np.abs(cand - 1.3).astype(np.float32)[:, None, None] * np.ones((1, 1, 3), np.float32)
+    vol[cand == 0.75, 0, 1] = 0.0  # pixel 1: the midpoint next to the winner is no minimum of its grid
+    d, _ = _wta_subpixel(vol, cand, interleave=True)
+    d_grid, _ = _wta_subpixel(vol[::2], cand[::2])
+    assert d[0, 0] == pytest.approx(1.3, abs=1e-6)
+    assert d[0, 1] == d_grid[0, 1]
 
 
 @pytest.mark.skipif(not __import__("nfdepth._cost_volume", fromlist=["_njit"])._njit, reason="numba not installed")
@@ -712,35 +747,37 @@ def test_numba_streaming_wta_matches_full_volume():
 
     rng = np.random.default_rng(1)
     cases = ((40, 0.5, 8), (7, 0.5, 3), (2, 0.5, 8), (1, 0.5, 8), (30, 0.7, 4), (25, 0.3, 8), (9, 3.0, 4), (6, 0.5, 1))
-    for (n, step, k), ties in itertools.product(cases, (False, True)):
+    interleaved = ((41, 0.25, 8), (7, 0.25, 3), (9, 0.25, 1), (3, 0.25, 8), (31, 0.35, 4), (25, 0.15, 8), (9, 1.5, 4), (13, 0.25, 5))
+    for (n, step, k, interleave), ties in itertools.product([(*c, False) for c in cases] + [(*c, True) for c in interleaved], (False, True)):
         vol = rng.random((n, 12, 16)).astype(np.float32)
         if ties:
             vol = np.round(vol * 8) / 8
         vol[:, :2] = np.inf
         vol[rng.random(vol.shape) < 0.05] = np.inf
         cand = np.arange(n) * step + 1.0
-        d, c0 = _wta_subpixel(vol, cand)
-        near = np.abs(np.asarray(cand, np.float32)[:, None, None] - d[None]) <= 1.0
-        c2 = np.min(np.where(near, np.inf, vol), axis=0)
-        m, step = _window_half(cand, 1.0)
+        d, c0 = _wta_subpixel(vol, cand, interleave=interleave)
+        m, step = _window_half(cand, 1.0, interleave=interleave)
         idx, state = _nb_wta_state(vol.shape[1:], m)
         for j in range(0, n, k):
             chunk = np.ascontiguousarray(np.moveaxis(vol[j : j + k], 0, 1))
-            _nb_wta_chunk(chunk, chunk.shape[1], j, m, idx, state)
-        d_s, c0_s, c2_s = _nb_wta_result(idx, state, cand, step, m, 1.0)
+            _nb_wta_chunk(chunk, chunk.shape[1], j, m, idx, state, interleave)
+        d_s, c0_s, c2_s = _nb_wta_result(idx, state, cand, step, m, 1.0, interleave=interleave)
         np.testing.assert_array_equal(d_s, d)
         np.testing.assert_array_equal(c0_s, c0)
-        np.testing.assert_array_equal(c2_s, c2)
+        np.testing.assert_array_equal(c2_s, _uniqueness_cost(vol, cand, d, interleave))
 
 
-@pytest.mark.parametrize("positions", [(0, 1, 2), (0, 1, 2, 3, 4), (0, 1, 3), (0, 2, 3, 4, 5), (0.0, 1.3, 2.0)])
-def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
+@pytest.mark.parametrize(
+    ("positions", "interleave"),
+    [((0, 1, 2), False), ((0, 1, 2, 3, 4), False), ((0, 1, 3), False), ((0, 2, 3, 4, 5), False), ((0.0, 1.3, 2.0), False), ((0, 1, 2), True), ((0, 1, 3), True)],
+)
+def test_cost_volume_numba_matches_numpy(positions, interleave, monkeypatch):
     """The fused numba cost volume gives the NumPy/OpenCV reference's winner, cost and uniqueness.
 
     (0, 1, 3), (0, 2, 3, 4, 5) and (0, 1.3, 2) reach unequally far on the two
     sides, so the views of both sides compete too (``_both_sides``).
 
-    Integer positions put every candidate shift on the half-pixel grid, where
+    Integer positions put every candidate shift on the quarter-pixel grid, where
     cv2.warpAffine's 1/32-px fixed-point weights are exact: the two agree to
     float32 rounding (the box sums run in another order: a few ulp, so 1e-5
     relative). Fractional positions: cv2 rounds the sample position to
@@ -757,8 +794,8 @@ def test_cost_volume_numba_matches_numpy(positions, monkeypatch):
     feats = _cost_volume._match_features(views)
     spread = float(np.percentile(views[ref], 99) - np.percentile(views[ref], 1))
     guide = ((views[ref] - np.percentile(views[ref], 1)) / spread).astype(np.float32)
-    cand = np.arange(-1.0, 8.0, 0.5)
-    kw = dict(radius=4, eps=1e-4, tau_i=0.03 * spread, tau_g=0.01 * spread, alpha=0.9, exclude_px=1.0)
+    cand = np.arange(-1.0, 8.01, 0.25) if interleave else np.arange(-1.0, 8.0, 0.5)  # interleaved: the grid and its midpoints
+    kw = dict(radius=4, eps=1e-4, tau_i=0.03 * spread, tau_g=0.01 * spread, alpha=0.9, exclude_px=1.0, interleave=interleave)
     out = {}
     for use in (False, True):
         monkeypatch.setattr(fast, "USE_NUMBA", use)

@@ -174,59 +174,129 @@ def _candidate_step(candidates) -> float:
     return float(candidates[1] - candidates[0]) if len(candidates) > 1 else 1.0
 
 
-def _wta_subpixel(vol, candidates):
+def _wta_subpixel(vol, candidates, *, interleave=False):
     """Winner-take-all over the whole cost volume with a sub-sample (equiangular) fit: ``(d, c_best)``.
 
-    The plain definition that the streamed versions are tested against.
+    The plain definition that the streamed versions are tested against. With
+    ``interleave`` the winner is taken over the even candidates (the
+    search's grid; the odd ones lie halfway between) and refined by
+    :func:`_interleaved_fit`.
     """
-    idx = np.argmin(vol, axis=0)
     n = len(candidates)
+    idx = 2 * np.argmin(vol[::2], axis=0) if interleave else np.argmin(vol, axis=0)
     c0 = np.take_along_axis(vol, idx[None], 0)[0]
-    cm = np.take_along_axis(vol, np.clip(idx - 1, 0, n - 1)[None], 0)[0]
-    cp = np.take_along_axis(vol, np.clip(idx + 1, 0, n - 1)[None], 0)[0]
+
+    def cost_at(k):  # the cost k candidates from the winner (inf outside the volume)
+        jj = idx + k
+        c = np.take_along_axis(vol, np.clip(jj, 0, n - 1)[None], 0)[0]
+        return np.where((jj >= 0) & (jj < n), c, np.float32(np.inf))
+
+    if interleave:
+        return _interleaved_fit(idx, cost_at, candidates), c0
+    cm = np.where(idx > 0, cost_at(-1), c0)
+    cp = np.where(idx < n - 1, cost_at(1), c0)
     return _v_fit(idx, c0, cm, cp, candidates, _candidate_step(candidates)), c0
+
+
+def _v_offset(cm, c0, cp, inner):
+    """Equiangular (V) sub-sample offset of a minimum ``c0`` between ``cm`` and ``cp``, in samples, clipped to +-0.5 (0 unless ``inner``).
+
+    The truncated absolute-difference cost is V-shaped about its minimum,
+    and a parabola would pull toward the samples (Shimizu & Okutomi 2005).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        slope = np.maximum(cm, cp) - c0
+        off = np.where(inner & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
+    return np.clip(np.nan_to_num(off), -0.5, 0.5)
 
 
 def _v_fit(idx, c0, cm, cp, candidates, step):
     """Sub-sample position of the winner ``idx`` from its cost ``c0`` and its neighbours' ``cm``, ``cp``."""
     n = len(candidates)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        # equiangular (V) fit: the truncated absolute-difference cost is V-shaped
-        # about its minimum, and a parabola would pull toward the samples
-        # (Shimizu & Okutomi 2005)
-        slope = np.maximum(cm, cp) - c0
-        off = np.where((idx > 0) & (idx < n - 1) & (slope > 0), 0.5 * (cm - cp) / slope, 0.0)
-    off = np.clip(np.nan_to_num(off), -0.5, 0.5)
+    off = _v_offset(cm, c0, cp, (idx > 0) & (idx < n - 1))
     d = np.asarray(candidates, np.float32)[idx] + off * step
     return d.astype(np.float32)
 
 
-def _window_half(candidates, exclude_px):
+def _grid_step(candidates) -> float:
+    """Spacing of the interleaved search's grid, the even ``candidates`` (the odd ones lie halfway between)."""
+    return float(candidates[2] - candidates[0]) if len(candidates) > 2 else 1.0
+
+
+def _interleaved_fit(idx, cost_at, candidates):
+    """Sub-sample winner of the grid of even ``candidates``, refined with the odd ones halfway between.
+
+    The equiangular fit's bias cycles with the phase of the true disparity
+    between its samples (pixel locking; about 0.09 grid steps RMS, nearly a
+    sine of the phase). The winner ``idx`` (even) is fitted on its grid
+    (``idx - 2, idx, idx + 2``: the plain search's result) and the odd
+    neighbour that costs less on the grid of odd candidates (``j - 2, j, j +
+    2``, ``j = idx +- 1``); the two phases differ by half a step, so the sine
+    cancels in their mean (as Shimizu & Okutomi's half-pixel-shifted matching
+    does), while each fit keeps the noise tolerance of samples a whole step
+    apart. On a clean minimum the two fits differ by twice the bias (0.3
+    steps at most); where they differ by more than half a step, the grids
+    see different minima (a sharp, aliased edge: on the bundled noise-free
+    pyramid the mean there cost a quarter of the edge points the dense field
+    confirms), and the winner's grid alone gives the fit, as it does where
+    the odd neighbour is no minimum of its grid (a second surface's costs
+    within three candidates: near a depth step) or lies within three
+    candidates of an end.
+    ``cost_at(k)``: the costs ``k`` candidates from the winner.
+    """
+    n = len(candidates)
+    cand32 = np.asarray(candidates, np.float32)
+    span = _grid_step(candidates)
+    c0, cm1, cp1 = cost_at(0), cost_at(-1), cost_at(1)
+    d_a = cand32[idx] + _v_offset(cost_at(-2), c0, cost_at(2), (idx >= 2) & (idx <= n - 3)) * span
+    right = cp1 < cm1
+    j = np.clip(idx + np.where(right, 1, -1), 0, n - 1)
+    c_j = np.where(right, cp1, cm1)
+    c_jm, c_jp = np.where(right, cm1, cost_at(-3)), np.where(right, cost_at(3), cp1)
+    d_b = cand32[j] + _v_offset(c_jm, c_j, c_jp, True) * span
+    # the odd neighbour is its grid's minimum there, and both fits find the same one
+    both = (idx >= 3) & (idx <= n - 4) & (c_j <= c_jm) & (c_j <= c_jp) & (np.abs(d_a - d_b) <= 0.5 * span)
+    return np.where(both, np.float32(0.5) * (d_a + d_b), d_a).astype(np.float32)
+
+
+def _window_half(candidates, exclude_px, *, interleave=False):
     """``m``: slices at least ``m`` from the winner are always more than ``exclude_px`` from its sub-sample position.
 
     At least 2, so that the window around the winner holds both neighbours
     of its sub-sample fit (steps over twice ``exclude_px`` would give 1).
+    With ``interleave``, twice the ``m`` of the grid of even candidates
+    for a fit up to 3/4 of its step from the winner (at least 4:
+    :func:`_interleaved_fit` reads three candidates either side), whose
+    candidates alone count for the uniqueness cost.
     """
     step = _candidate_step(candidates)
+    if interleave:  # the grid's step; the fit moves up to 3/4 of it from the winner (_interleaved_fit)
+        grid = _grid_step(candidates)
+        return 2 * max(2, int(np.floor((exclude_px + 0.75 * grid) / grid)) + 1), step
     return max(2, int(np.floor((exclude_px + 0.5 * step) / step)) + 1), step
 
 
-def _wta_finish(idx, best, win, far, candidates, step, m, exclude_px):
+def _wta_finish(idx, best, win, far, candidates, step, m, exclude_px, interleave=False):
     """Sub-sample winner and uniqueness cost from the streamed state (see :func:`_streaming_wta`)."""
     n = len(candidates)
     cand32 = np.asarray(candidates, np.float32)
-    cm = np.where(idx > 0, win[m - 2], best)  # m >= 2 (_window_half)
-    cp = np.where(idx < n - 1, win[m], best)
-    d = _v_fit(idx, best, cm, cp, candidates, step)
+    if interleave:
+        d = _interleaved_fit(idx, lambda k: best if k == 0 else win[m - 1 + k], candidates)
+    else:
+        cm = np.where(idx > 0, win[m - 2], best)  # m >= 2 (_window_half)
+        cp = np.where(idx < n - 1, win[m], best)
+        d = _v_fit(idx, best, cm, cp, candidates, step)
     c_second = far.copy()
-    for k in range(-(m - 1), m):
+    # interleaved: the even candidates only, as the plain search of that grid
+    reach = m - 2 if interleave else m - 1  # (m even when interleaved: the even offsets up to m - 2)
+    for k in range(-reach, reach + 1, 2 if interleave else 1):
         jj = np.clip(idx + k, 0, n - 1)
         far_k = (np.abs(cand32[jj] - d) > exclude_px) & (idx + k >= 0) & (idx + k < n)
         np.minimum(c_second, np.where(far_k, win[m - 1 + k], np.inf), out=c_second)
     return d, best, c_second
 
 
-def _streaming_wta(slices, candidates, *, exclude_px=1.0):
+def _streaming_wta(slices, candidates, *, exclude_px=1.0, interleave=False):
     """:func:`_wta_subpixel` and the uniqueness cost over a stream of cost slices, in O(pixels) memory.
 
     Returns ``(d, c_best, c_second)``: the sub-sample winner, its cost, and
@@ -236,8 +306,10 @@ def _streaming_wta(slices, candidates, *, exclude_px=1.0):
     minimum over slices at least ``m`` before it and at least ``m`` after it
     (``m`` such that those are always more than ``exclude_px`` from any
     sub-sample position of the winner), and a ring of the last ``m`` slices.
+    With ``interleave`` only the even slices compete and count for the
+    minima; the odd ones are kept near the winner for its fit.
     """
-    m, step = _window_half(candidates, exclude_px)
+    m, step = _window_half(candidates, exclude_px, interleave=interleave)
     ring = [None] * m  # ring[j % m] = slice j
     idx = best = pre = after = win = None
     for j, c in enumerate(slices):
@@ -249,15 +321,17 @@ def _streaming_wta(slices, candidates, *, exclude_px=1.0):
             after = np.full((h, w), np.inf, np.float32)  # min of slices idx + m .. j
             win = np.full((2 * m - 1, h, w), np.inf, np.float32)  # win[m - 1 + k] = slice idx + k
             far_before = np.full((h, w), np.inf, np.float32)  # min of slices 0 .. idx - m
-        if j >= m:
+        grid = not interleave or j % 2 == 0  # a slice of the search's grid (m is even when interleaved)
+        if j >= m and grid:
             np.minimum(pre, ring[j % m], out=pre)
         ring[j % m] = c
-        new = c < best
+        new = (c < best) if grid else np.zeros(c.shape, bool)
         rel = j - idx
         # pixels whose winner stays: record the slice near it, or fold it into the far minimum
         for k in range(1, m):
             np.copyto(win[m - 1 + k], c, where=(rel == k) & ~new)
-        np.minimum(after, np.where((rel >= m) & ~new, c, np.inf), out=after)
+        if grid:
+            np.minimum(after, np.where((rel >= m) & ~new, c, np.inf), out=after)
         if new.any():
             idx[new] = j
             best[new] = c[new]
@@ -270,10 +344,10 @@ def _streaming_wta(slices, candidates, *, exclude_px=1.0):
     if idx is None:
         msg = "no cost slices"
         raise ValueError(msg)
-    return _wta_finish(idx, best, win, np.minimum(far_before, after), candidates, step, m, exclude_px)
+    return _wta_finish(idx, best, win, np.minimum(far_before, after), candidates, step, m, exclude_px, interleave)
 
 
-def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_g, alpha, exclude_px=1.0, threads=1):
+def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_g, alpha, exclude_px=1.0, interleave=False, threads=1):
     """Winner of the aggregated cost volume over ``candidates`` and its uniqueness.
 
     Parameters
@@ -293,6 +367,9 @@ def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_
         Truncations and gradient weight of the per-view cost.
     exclude_px : float
         Candidates farther than this from the winner count for ``c_second``.
+    interleave : bool
+        Sub-sample fit on two interleaved grids of every second candidate,
+        averaged (:func:`_interleaved_fit`), instead of the plain fit.
     threads : int
         Threads of the numba path, over the row strips of :func:`_row_strips`
         (the result does not depend on it).
@@ -303,9 +380,9 @@ def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_
     """
     agg = _GuidedAggregator(guide, radius, eps)
     if _fast.USE_NUMBA and _njit is not None:
-        return _nb_best_disparity(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha, exclude_px=exclude_px, threads=threads)
+        return _nb_best_disparity(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha, exclude_px=exclude_px, interleave=interleave, threads=threads)
     slices = _cost_slices(feats, t, ref, candidates, agg, tau_i=tau_i, tau_g=tau_g, alpha=alpha)
-    return _streaming_wta(slices, candidates, exclude_px=exclude_px)
+    return _streaming_wta(slices, candidates, exclude_px=exclude_px, interleave=interleave)
 
 
 def _row_strips(h, radius):
@@ -323,7 +400,7 @@ def _row_strips(h, radius):
     return list(itertools.pairwise(edges))
 
 
-def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px, threads=1):
+def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, exclude_px, interleave=False, threads=1):
     """:func:`best_disparity` with the fused numba kernels (see the module docstring), strips on ``threads`` threads."""
     h, w = feats[0][0].shape
     # the views' features stacked (scratch: read by the kernels only)
@@ -346,7 +423,7 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
     if n == 0:
         msg = "no cost slices"
         raise ValueError(msg)
-    m, step = _window_half(candidates, exclude_px)
+    m, step = _window_half(candidates, exclude_px, interleave=interleave)
     out = [np.empty((h, w), f32) for _ in range(3)]  # d, c_best, c_second
 
     stop = threading.Event()  # set by _run_strips on a failure or an interrupt
@@ -367,8 +444,8 @@ def _nb_best_disparity(feats, t, ref, candidates, agg, *, tau_i, tau_g, alpha, e
                     _nb_side_cost(fi, fg, ks, shifts[j0 + jj][si], ref, a1, a2, ti, tg, fill, agg.g, p[si], q[si], colcnt[si], yp, yq)
                 _nb_box_coeffs(p, q, agg.mi, agg.inv, init_ab, init_c, add_r, sub_r, add_c, sub_c, inv_area, a, b, ya, yb, yp, ya, two)
                 _nb_box_finish(a, b, agg.g, colcnt, init_out, init_c, add_r, sub_r, add_c, sub_c, inv_area, buf, jj, y0, y1, ya, two, both)
-            _nb_wta_chunk(buf, count, j0, m, idx, state)
-        _nb_wta_result(idx, state, candidates, step, m, exclude_px, [o[y0:y1] for o in out])
+            _nb_wta_chunk(buf, count, j0, m, idx, state, interleave)
+        _nb_wta_result(idx, state, candidates, step, m, exclude_px, [o[y0:y1] for o in out], interleave=interleave)
 
     strips = _row_strips(h, r)
     # the kernels (and NumPy's loops of the finish) release the GIL; each strip
@@ -412,12 +489,13 @@ def _nb_wta_state(shape, m, *, scratch=None):
     return idx, state
 
 
-def _nb_wta_result(idx, state, candidates, step, m, exclude_px, out=None):
+def _nb_wta_result(idx, state, candidates, step, m, exclude_px, out=None, *, interleave=False):
     """``(d, c_best, c_second)`` from the winner index and state of :func:`_nb_wta_chunk` (as :func:`_wta_finish`), into ``out`` if given."""
     if out is None:
         out = [np.empty(idx.shape, np.float32) for _ in range(3)]
     # float32 as NumPy computes _wta_finish: a Python float step and exclude_px are weak scalars
-    _nb_wta_finish(idx, state, np.asarray(candidates, np.float32), np.float32(step), m, np.float32(exclude_px), *out)
+    step = _grid_step(candidates) if interleave else step
+    _nb_wta_finish(idx, state, np.asarray(candidates, np.float32), np.float32(step), m, np.float32(exclude_px), bool(interleave), *out)
     return tuple(out)
 
 
@@ -664,7 +742,7 @@ if _njit is not None:
                 _nb_columns_step_sides(a, b, add_r[y] - src_off, sub_r[y] - src_off, cola0, colb0, cola1, colb1, two)
 
     @_jit
-    def _nb_wta_chunk(chunk, count, j0, m, idx, state):
+    def _nb_wta_chunk(chunk, count, j0, m, idx, state, interleave):
         """Winner-take-all update over slices ``j0 .. j0 + count - 1`` (``chunk[:, :count]``), as :func:`_streaming_wta`.
 
         ``state[r]`` holds planes of the row's best cost, prefix minimum
@@ -672,7 +750,9 @@ if _njit is not None:
         winner and the ring of the last ``m`` slices (slice ``j`` in plane
         ``j % m``). Slice by slice, each plane is updated along the row in a
         branch-free loop that numba vectorises: first the window (whose
-        update reads the winner before this slice), then the rest.
+        update reads the winner before this slice), then the rest. With
+        ``interleave`` an odd slice is only recorded near the winner and in
+        the ring (:func:`_streaming_wta`).
         """
         h = chunk.shape[0]
         w = chunk.shape[2]
@@ -687,6 +767,16 @@ if _njit is not None:
             for jq in range(count):
                 j = j0 + jq
                 cost = chunk[r, jq]
+                if interleave and j % 2 == 1:
+                    for e in range(m, nw):  # the winner's later slices (odd offsets from an even winner)
+                        win = st[3 + e]
+                        k = e - (m - 1)
+                        for c in range(w):
+                            win[c] = cost[c] if j - ir[c] == k else win[c]
+                    ring = st[3 + nw + j % m]
+                    for c in range(w):
+                        ring[c] = cost[c]
+                    continue
                 for e in range(nw):
                     win = st[3 + e]
                     k = e - (m - 1)  # win holds slice idx + k
@@ -722,33 +812,56 @@ if _njit is not None:
                     ir[c] = j if new else i_c
                     ring[c] = cv
 
+    @_jit_inline
+    def _nb_v_offset(cm, c0, cp, inner):
+        """:func:`_v_offset` of one pixel: NaN-propagating maximum, nan_to_num, clip (float32)."""
+        half = np.float32(0.5)
+        slope = (cm if (math.isnan(cm) or cm > cp) else cp) - c0
+        off = np.float32(0.0)
+        if inner and slope > 0:
+            off = half * (cm - cp) / slope
+            if math.isnan(off):
+                off = np.float32(0.0)
+        return min(max(off, -half), half)
+
     @_jit
-    def _nb_wta_finish(idx, state, cand32, step, m, exclude, d, c_best, c_second):
-        """:func:`_wta_finish` of the state of :func:`_nb_wta_chunk` into ``d``, ``c_best``, ``c_second``, with its float32 arithmetic."""
+    def _nb_wta_finish(idx, state, cand32, step, m, exclude, interleave, d, c_best, c_second):
+        """:func:`_wta_finish` of the state of :func:`_nb_wta_chunk` into ``d``, ``c_best``, ``c_second``, with its float32 arithmetic.
+
+        ``step``: the candidates' spacing, or with ``interleave`` the grid's (:func:`_grid_step`).
+        """
         h, w = idx.shape
         n = cand32.size
         half = np.float32(0.5)
+        reach = m - 2 if interleave else m - 1  # the window's offsets of the winner's grid (_wta_finish)
+        kstep = 2 if interleave else 1
         for r in range(h):
             st = state[r]
             for c in range(w):
                 i = idx[r, c]
                 c0 = st[0, c]
-                cm = st[3 + m - 2, c] if i > 0 else c0
-                cp = st[3 + m, c] if i < n - 1 else c0
-                # _v_fit: equiangular fit, NaN-propagating maximum, nan_to_num, clip
-                slope = (cm if (math.isnan(cm) or cm > cp) else cp) - c0
-                off = np.float32(0.0)
-                if i > 0 and i < n - 1 and slope > 0:
-                    off = half * (cm - cp) / slope
-                    if math.isnan(off):
-                        off = np.float32(0.0)
-                off = min(max(off, -half), half)
-                dv = cand32[i] + off * step
+                if interleave:
+                    # _interleaved_fit: the even winner on its grid, averaged with the cheaper odd neighbour on the odd grid
+                    cm1 = st[3 + m - 2, c]
+                    cp1 = st[3 + m, c]
+                    dv = cand32[i] + _nb_v_offset(st[3 + m - 3, c], c0, st[3 + m + 1, c], i >= 2 and i <= n - 3) * step
+                    if cp1 < cm1:
+                        j, c_j, c_jm, c_jp = i + 1, cp1, cm1, st[3 + m + 2, c]
+                    else:
+                        j, c_j, c_jm, c_jp = i - 1, cm1, st[3 + m - 4, c], cp1
+                    if i >= 3 and i <= n - 4 and c_j <= c_jm and c_j <= c_jp:
+                        d_b = cand32[j] + _nb_v_offset(c_jm, c_j, c_jp, True) * step
+                        if abs(dv - d_b) <= half * step:
+                            dv = half * (dv + d_b)
+                else:
+                    cm = st[3 + m - 2, c] if i > 0 else c0
+                    cp = st[3 + m, c] if i < n - 1 else c0
+                    dv = cand32[i] + _nb_v_offset(cm, c0, cp, i > 0 and i < n - 1) * step
                 d[r, c] = dv
                 c_best[r, c] = c0
                 # np.minimum over the far window entries (NaN-propagating)
                 c2 = st[2, c]
-                for k in range(-(m - 1), m):
+                for k in range(-reach, reach + 1, kstep):
                     jj = min(max(i + k, 0), n - 1)
                     if abs(cand32[jj] - dv) > exclude and i + k >= 0 and i + k < n:
                         v = st[3 + m - 1 + k, c]

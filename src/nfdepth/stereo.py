@@ -72,7 +72,13 @@ measurement in a coarse-to-fine warping scheme:
    of less than 4 px and a farther view exists (:func:`_candidate_step`:
    the winner's sub-sample bias is about 0.1 steps, so a near view's small
    shift set the precision of the whole row: views -1 and 3, median 3.0 ->
-   0.28 %); an equiangular sub-sample fit; a 3 x 3 median. Pixels whose best
+   0.28 %); an equiangular sub-sample fit, which on those rows also reads
+   the midpoints between the candidates and averages the fits on the two
+   interleaved grids, whose phase-locked biases cancel
+   (:func:`nfdepth._cost_volume._interleaved_fit`; the winner and its
+   uniqueness stay the grid's; fronto-parallel planes at 3 px per view:
+   RMS bias 0.046 -> 0.007 px; views -1 and 1 of the board-and-wall scene:
+   median 3.0 -> 0.42 %); a 3 x 3 median. Pixels whose best
    cost is not at least ``min_cost_margin`` (relative) below the best cost
    more than 1 px away are ``UNCERTAIN`` (ambiguous: textureless or
    repetitive), as are edge points below ``edge_cost_margin``. So are
@@ -246,7 +252,9 @@ not show:
   textured fronto-parallel planes, is 0.1 candidate steps (0.022 / 0.053 /
   0.100 px for steps of 0.25 / 0.5 / 1 px); real textures, shifted
   exactly, give 0.025-0.046 steps (Art, Teddy, Tsukuba, Moebius), so on
-  real images the term is on the safe side. Before it was counted, the
+  real images the term is on the safe side. Where the interleaved fit
+  runs (step 3c: the nearest view shifts the scene by less than 4 px) the
+  bias left is 0.013-0.016 grid steps RMS; the term counts 0.02. Before it was counted, the
   median |error| / std of the dense field on noisy slanted textured planes
   was 2.5-12 (0.67 is calibrated); now 0.50-0.91.
 * a bias shown by the paper's point-wise estimates: the mean squared
@@ -300,6 +308,11 @@ _STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WI
 # step: 0.022 / 0.053 / 0.100 px for steps of 0.25 / 0.5 / 1 px (max 0.04 /
 # 0.09 / 0.14 px).
 _SUBSAMPLE_BIAS_STEPS = 0.1
+# The same with the interleaved fit (:func:`nfdepth._cost_volume._interleaved_fit`),
+# in steps of its grids (twice the candidates' spacing), measured the same way
+# at disparities of 1.5 and 3 px: 0.013-0.016 (max 0.027) for steps of 0.25 / 0.5
+# / 1 px at 0.5 grey levels of noise, 0.007 at 2.
+_INTERLEAVED_BIAS_STEPS = 0.02
 # Search of the coarsest pyramid level (module docstring, step 3d): views
 # may shift by up to this fraction of the image width; window radius (px of
 # that level); the robust extremes (percentiles) of its confident winners.
@@ -1115,24 +1128,35 @@ def _reported_range(candidates, given, unit):
 
 
 def _candidate_step(step_px, reach, shift_px, lo, hi):
-    """The cost volume's candidate step (px of the nearest view) for views reaching ``reach`` times as far.
+    """The cost volume's sub-sample step (px of the nearest view) for views reaching ``reach`` times as far, and whether to interleave.
 
-    ``step_px`` (``cost_step_px``) as given, unless the farthest view lies
-    farther from the reference than the nearest one (``reach > 1``) and the
-    nearest one shifts the scene by a median of less than ``_FINE_SHIFT_PX``
-    (``shift_px``): then the winner's sub-sample bias (0.1 steps) would be a
-    large part of that shift, and of the far views' much larger one. The step
-    is then ``step_px / k``, ``k`` the smaller of ``reach`` and
-    ``_FINE_SHIFT_PX / shift_px`` rounded up (``step_px`` in px of the
-    farthest view at most), for no more than ``_FINE_CANDIDATES``
-    candidates over ``lo .. hi``. Whole divisions keep the candidates where
-    they were for positions given in another unit (rounded differently).
+    Returns ``(step, interleave)``. ``step_px`` (``cost_step_px``) as given,
+    without interleaving, unless the nearest view shifts the scene by a
+    median of less than ``_FINE_SHIFT_PX`` (``shift_px``): then the winner's
+    sub-sample bias (0.1 steps) would be a large part of that shift. Then
+
+    * where the farthest view lies farther from the reference than the
+      nearest one (``reach > 1``), the step is ``step_px / k``, ``k`` the
+      smaller of ``reach`` and ``_FINE_SHIFT_PX / shift_px`` rounded up
+      (``step_px`` in px of the farthest view at most), for no more than
+      ``_FINE_CANDIDATES`` steps over ``lo .. hi``; whole divisions keep the
+      candidates where they were for positions given in another unit
+      (rounded differently);
+    * the midpoints between the candidates join the cost volume for the
+      sub-sample fit, which averages the winner's fit on its grid with the
+      fit on the midpoints' grid (:func:`nfdepth._cost_volume._interleaved_fit`):
+      their biases cancel. The winner, its uniqueness and the range's ends
+      stay those of the grid. Not for more than ``_FINE_CANDIDATES``
+      candidates (the midpoints double the volume's time).
     """
-    if not reach > 1.0 or not shift_px < _FINE_SHIFT_PX:
-        return step_px
-    k = math.ceil(min(reach, _FINE_SHIFT_PX / max(shift_px, 1e-6)) - 1e-6)
-    k = min(k, math.floor(_FINE_CANDIDATES * step_px / (hi - lo)))
-    return step_px / max(k, 1)
+    if not shift_px < _FINE_SHIFT_PX:
+        return step_px, False
+    k = 1
+    if reach > 1.0:
+        k = math.ceil(min(reach, _FINE_SHIFT_PX / max(shift_px, 1e-6)) - 1e-6)
+        k = max(1, min(k, math.floor(_FINE_CANDIDATES * step_px / (hi - lo))))
+    step = step_px / k
+    return step, bool(hi - lo <= _FINE_CANDIDATES * step)
 
 
 def _candidates(lo, hi, step_px):
@@ -1401,17 +1425,28 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
 
 
-def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, spread, textured, min_cost_margin):
-    """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share, at_end)``.
+def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, spread, textured, min_cost_margin):
+    """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share, at_end, bias_px)``.
 
+    ``step`` is the spacing of the search's grid; with ``interleave`` the
+    candidates include the midpoints between, for the sub-sample fit alone
+    (:func:`_candidate_step`).
     ``at_end`` marks the winners at an end of the range that ``ends`` (lower,
     upper) rejects; ``share`` is the share of the textured pixels with no
     unique match inside the range: ambiguous (cost margin below
-    ``min_cost_margin``) or ``at_end`` (0 when there are too few textured pixels).
+    ``min_cost_margin``) or ``at_end`` (0 when there are too few textured pixels);
+    ``bias_px`` is the RMS sub-sample bias of the winner.
     """
     candidates, step = _candidates(lo, hi, step_px)
+    if interleave and 3 <= len(candidates) <= _FINE_CANDIDATES:  # (a wider retry: the plain grid)
+        # the midpoints between the candidates: the second grid of the sub-sample fit
+        grid, candidates = candidates, np.empty(2 * len(candidates) - 1)
+        candidates[0::2] = grid
+        candidates[1::2] = 0.5 * (grid[:-1] + grid[1:])
+    else:
+        interleave = False
     # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
-    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, **match)
+    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, interleave=interleave, **match)
     # uniqueness: the best cost against the best one more than 1 px away
     margin = _cost_margin(c_best, c_second, spread)
     at_end = ((d <= np.float32(candidates[0])) & ends[0]) | ((d >= np.float32(candidates[-1])) & ends[1])
@@ -1421,7 +1456,7 @@ def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, sprea
         if min_cost_margin > 0:
             unmatched = unmatched | ~(margin[textured] >= min_cost_margin)
         share = float(np.mean(unmatched))
-    return d, margin, candidates, step, share, at_end
+    return d, margin, candidates, step, share, at_end, (_INTERLEAVED_BIAS_STEPS if interleave else _SUBSAMPLE_BIAS_STEPS) * step
 
 
 def _warn_identical_views(views):
@@ -1775,7 +1810,7 @@ def static_stereo(
     var = np.full(d.shape, np.inf, np.float32)
     guided_radius = max(1, int(round(guided_scale * dense_window_px)))
     guide = [_guide(lv, p1, spread) for lv in pyramids[ref]]
-    searched = axis_message = None  # the cost volume's range as reported; the axis warning
+    searched = axis_message = lost_message = None  # the cost volume's range as reported; the axis and lost-scene warnings
     for level in range(levels - 1, -1, -1):
         smoothed = [gaussian_smooth(p[level], sigma_px=sigma_px) for p in pyramids]
         reference_nodes = _ReferenceNodes.of(smoothed[ref])
@@ -1837,17 +1872,16 @@ def static_stereo(
             src = [gaussian_smooth(p[0], sigma_px=cost_sigma_px) if cost_sigma_px > 0 else p[0] for p in pyramids]
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
-            step_px, reach = cost_step_px, float(np.max(np.abs(t)))
-            if reach > 1.0:  # a view farther than the nearest one: finer steps where the nearest one shifts little
-                shift = float(np.mean(np.abs(search_range))) if search_range is not None else median(np.abs(d[np.isfinite(d)]))
-                step_px = _candidate_step(cost_step_px, reach, shift, lo, hi)
-            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
+            # finer, interleaved candidates where the nearest view shifts the scene little
+            shift = float(np.mean(np.abs(search_range))) if search_range is not None else median(np.abs(d[np.isfinite(d)]))
+            step_px, interleave = _candidate_step(cost_step_px, float(np.max(np.abs(t))), shift, lo, hi)
+            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             # A winner at an end of the range is no minimum: its match lies
             # outside the range (UNCERTAIN). So are the ends 2 px beyond the
             # field's robust extremes and the extra step beyond a given range's;
             # an end the coarse search widened lies at that search's resolution
             # and keeps its winners.
-            d, margin, candidates, step, share, at_end = _search(lo, hi, ends=(True, True), **volume)
+            d, margin, candidates, step, share, at_end, bias_px = _search(lo, hi, ends=(True, True), **volume)
             as_given = None  # the coarse search of step 3d, when it runs
             coarse_search = {"guide_offset": p1, "spread": spread, "noise_floor": noise_floor, "min_cost_margin": min_cost_margin, "match": match}
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
@@ -1857,7 +1891,7 @@ def static_stereo(
                 if wide != (lo, hi):
                     retry = _search(*wide, ends=(wide[0] == lo, wide[1] == hi), **volume)
                     if retry[4] < share:
-                        d, margin, candidates, step, share, at_end = retry
+                        d, margin, candidates, step, share, at_end, bias_px = retry
             del volume, feats, src
             searched = _reported_range(candidates, search_range, unit)
             message = None
@@ -1865,7 +1899,7 @@ def static_stereo(
                 as_given = as_given if as_given is not None else _coarse_search(pyramids, t, ref, **coarse_search)
                 message = axis_message = _axis_message(share, pyramids, t, ref, axis, as_given, **coarse_search)
             if message is None and share > _LOST_MATCH_SHARE and shift_message is None:
-                message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
+                message = lost_message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
             if message is not None:
                 warnings.warn(message, UserWarning, stacklevel=2)
             if step > step_px * (1.0 + 1e-9):
@@ -1914,7 +1948,7 @@ def static_stereo(
             red = np.where(np.isfinite(red), np.maximum(red, 1.0), 1.0)
             var = np.where(info.max() > 0, s_c**2 * red * corr_area / (box_n * _box(info, cost_radius)), np.inf)
             # plus the winner's sub-sample bias, which no amount of information removes
-            var = (var + (_SUBSAMPLE_BIAS_STEPS * step) ** 2).astype(np.float32)
+            var = (var + bias_px**2).astype(np.float32)
         var[~np.isfinite(var)] = np.inf
     # A box sum of ~0 information can round to a tiny negative number: no information.
     var[~(var >= 0)] = np.inf
@@ -2001,7 +2035,7 @@ def static_stereo(
     reason[(reason == Reason.OK) & ~(disparity > -0.5)] = Reason.NOT_POSITIVE
     n_ok = int(np.count_nonzero(reason == Reason.OK))
     n_neg = int(np.count_nonzero(reason == Reason.NOT_POSITIVE))
-    if n_neg > n_ok and not axis_message:  # the axis warning says why
+    if n_neg > n_ok and not axis_message and not lost_message:  # those warnings say why (a lost scene's few matches are chance)
         warnings.warn(
             f"{n_neg} determinable pixels have a negative disparity against {n_ok} positive (NOT_POSITIVE): "
             f"are the views in the wrong order? Scene points must shift toward -{'col' if axis == 'x' else 'row'} "
