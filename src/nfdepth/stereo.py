@@ -1873,7 +1873,8 @@ def static_stereo(
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
             # finer, interleaved candidates where the nearest view shifts the scene little
-            shift = float(np.mean(np.abs(search_range))) if search_range is not None else median(np.abs(d[np.isfinite(d)]))
+            finite = d[np.isfinite(d)]
+            shift = float(np.mean(np.abs(search_range))) if search_range is not None else (median(np.abs(finite)) if finite.size else math.nan)
             step_px, interleave = _candidate_step(cost_step_px, float(np.max(np.abs(t))), shift, lo, hi)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             # A winner at an end of the range is no minimum: its match lies
