@@ -368,8 +368,9 @@ def best_disparity(feats, t, ref, candidates, guide, *, radius, eps, tau_i, tau_
     exclude_px : float
         Candidates farther than this from the winner count for ``c_second``.
     interleave : bool
-        Sub-sample fit on two interleaved grids of every second candidate,
-        averaged (:func:`_interleaved_fit`), instead of the plain fit.
+        The even candidates are the search's grid and the odd ones lie
+        halfway between: the winner and its uniqueness are the grid's, and
+        the odd ones refine its sub-sample fit (:func:`_interleaved_fit`).
     threads : int
         Threads of the numba path, over the row strips of :func:`_row_strips`
         (the result does not depend on it).

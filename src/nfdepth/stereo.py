@@ -1128,7 +1128,7 @@ def _reported_range(candidates, given, unit):
 
 
 def _candidate_step(step_px, reach, shift_px, lo, hi):
-    """The cost volume's sub-sample step (px of the nearest view) for views reaching ``reach`` times as far, and whether to interleave.
+    """The cost volume's candidate step (px of the nearest view) for views reaching ``reach`` times as far, and whether to interleave.
 
     Returns ``(step, interleave)``. ``step_px`` (``cost_step_px``) as given,
     without interleaving, unless the nearest view shifts the scene by a
@@ -1873,8 +1873,11 @@ def static_stereo(
             feats = _match_features(src)
             textured = _textured(feats[ref], noise_floor)
             # finer, interleaved candidates where the nearest view shifts the scene little
-            finite = d[np.isfinite(d)]
-            shift = float(np.mean(np.abs(search_range))) if search_range is not None else (median(np.abs(finite)) if finite.size else math.nan)
+            if search_range is not None:
+                shift = float(np.mean(np.abs(search_range)))
+            else:
+                finite = d[np.isfinite(d)]
+                shift = median(np.abs(finite)) if finite.size else math.nan
             step_px, interleave = _candidate_step(cost_step_px, float(np.max(np.abs(t))), shift, lo, hi)
             volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             # A winner at an end of the range is no minimum: its match lies
