@@ -65,7 +65,10 @@ def test_paper_example_rig():
     np.testing.assert_array_equal(rig.relative_motion().translation, [-2.0, 0.0, 0.0])
     np.testing.assert_array_equal(rig.relative_motion().rotation, [0.0, 0.0, 0.0])
     assert rig.frame_interval == 1.0
-    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 2.0, "axis": "x", "positions": None, "column_positions": None, "disparity_range_px": None}
+    assert stereo_options_from_rig(rig) == {
+        "focal_px": 100.0, "baseline": 2.0, "axis": "x", "positions": None, "column_positions": None, "disparity_range_px": None,
+        "disparity_offset_px": 0.0, "cx_px": 99.5, "cy_px": 99.5,
+    }
     # the example matches the renderer's paper scene
     scene = synthetic.paper_dynamic_sequence(1)
     np.testing.assert_allclose(rig.relative_motion().translation, scene.relative_motion.translation)
@@ -103,7 +106,10 @@ def test_round_trip_all_sections(tmp_path):
     d["video"] = {"positions": [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.25, 0.0, 0.0]]}
     rig = rig_from_dict(d)
     np.testing.assert_array_equal(rig.stereo.direction, [0.0, 1.0, 0.0])
-    assert stereo_options_from_rig(rig) == {"focal_px": 100.0, "baseline": 0.5, "axis": "y", "positions": [0.0, 1.0, 2.5], "column_positions": None, "disparity_range_px": None}
+    assert stereo_options_from_rig(rig) == {
+        "focal_px": 100.0, "baseline": 0.5, "axis": "y", "positions": [0.0, 1.0, 2.5], "column_positions": None, "disparity_range_px": None,
+        "disparity_offset_px": 0.0, "cx_px": 101.25, "cy_px": 98.0,
+    }
     assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
     # a row along x with a column through its reference (x and y baselines)
     cross = copy.deepcopy(d)
@@ -120,6 +126,16 @@ def test_round_trip_all_sections(tmp_path):
     assert stereo_options_from_rig(rig)["disparity_range_px"] == [2.0, 40.5]
     assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
     assert rig != rig_from_dict(d)
+    # principal points that differ along the row (Middlebury's doffs), as nfdepth stereo --disparity-offset-px
+    shifted = copy.deepcopy(d)
+    shifted["stereo"]["disparity_offset_px"] = -31.086
+    rig = rig_from_dict(shifted)
+    assert rig.stereo.disparity_offset_px == -31.086
+    assert stereo_options_from_rig(rig)["disparity_offset_px"] == -31.086
+    assert "disparity_offset_px = -31.086" in rig_to_toml(rig)
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig))) == rig
+    assert rig != rig_from_dict(d)
+    assert "disparity_offset_px" not in rig_to_toml(rig_from_dict(d))  # 0 is the default: not written
     (tmp_path / "p.csv").write_text("frame,x,y,z\n0,0,0,0\n1,0.5,0,0\n2,1.0,0,0\n")
     d["video"] = {"poses": "p.csv"}
     rig = rig_from_dict(d, base_dir=tmp_path)
@@ -185,6 +201,11 @@ def test_poses_relative_to_rig_folder(tmp_path):
         (lambda d: d["stereo"].update(disparity_range_px=[0, float("inf")]), r"stereo\.disparity_range_px = \[0, inf\]: expected .*two finite numbers"),
         (lambda d: d["stereo"].update(disparity_range_px=[0, 8, 16]), r"stereo\.disparity_range_px = \[0, 8, 16\]: expected"),
         (lambda d: d["stereo"].update(disparity_range_px=64), r"stereo\.disparity_range_px = 64: expected"),
+        (lambda d: d["stereo"].update(disparity_offset_px="31"), r"stereo\.disparity_offset_px = '31': expected a finite number of px per unit of position within \+-1e\+06"),
+        (lambda d: d["stereo"].update(disparity_offset_px=float("nan")), r"stereo\.disparity_offset_px = nan: expected a finite number"),
+        (lambda d: d["stereo"].update(disparity_offset_px=1e300), r"stereo\.disparity_offset_px = 1e\+300: expected .*a value beyond is another unit or a typo"),
+        (lambda d: d["stereo"].update(disparity_offset_px=True), r"stereo\.disparity_offset_px = True: expected a finite number"),
+        (lambda d: d["stereo"].update(disparity_offset_px=2.0, column_positions=[0, 1, 2]), r"stereo\.disparity_offset_px = 2\.0: expected 0 with column_positions"),
         (lambda d: d["video"].update(positions=[[0, 0, 0]] * 3), r"video: velocity and positions contradict each other"),
         (lambda d: d["video"].update(poses="p.csv"), r"video: velocity and poses contradict each other"),
         (lambda d: d["video"].pop("velocity"), r"video: expected one of velocity, positions, poses"),

@@ -361,8 +361,10 @@ def test_bad_option_messages():
         with pytest.raises(exc, match=match):
             static_stereo(views, reference=1, **kwargs)
     r = static_stereo(views, reference=1)
-    with pytest.raises(ValueError, match=r"^disparity_offset_px must be finite, got nan$"):
-        r.depth(focal_px=100.0, baseline=1.0, disparity_offset_px=float("nan"))
+    expected = r"^disparity_offset_px must be a finite number of px per unit of position within \+-1e\+06 \(.*\), got "
+    for bad, exc in ((float("nan"), ValueError), (1e300, ValueError), (-2e6, ValueError), ("2", TypeError)):
+        with pytest.raises(exc, match=expected):
+            r.depth(focal_px=100.0, baseline=1.0, disparity_offset_px=bad)
 
 
 def _step_views():

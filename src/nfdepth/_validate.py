@@ -120,6 +120,21 @@ def check_nonnegative_finite(name: str, value) -> float:
     return _check_number(name, value, "a finite number >= 0", lambda x: np.isfinite(x) and x >= 0)
 
 
+#: Largest |disparity offset| accepted, px per unit of position: a difference of
+#: two principal points (each within 1e6 px of its image centre, see
+#: :class:`nfdepth.PinholeCamera`); a larger one is another unit or a typo.
+MAX_DISPARITY_OFFSET_PX = 1e6
+DISPARITY_OFFSET_EXPECTED = (
+    f"a finite number of px per unit of position within +-{MAX_DISPARITY_OFFSET_PX:g} (the principal points' difference"
+    " along the row, e.g. Middlebury's doffs; a value beyond is another unit or a typo)"
+)
+
+
+def check_disparity_offset(name: str, value) -> float:
+    """A disparity offset (px per unit of position) for ``depth = f b / (d + offset)``, within :data:`MAX_DISPARITY_OFFSET_PX`."""
+    return _check_number(name, value, DISPARITY_OFFSET_EXPECTED, lambda x: abs(x) <= MAX_DISPARITY_OFFSET_PX)
+
+
 #: Largest Gaussian scale (sigma or window) accepted, in px: far beyond any image's
 #: useful smoothing, and small enough for OpenCV's kernel sizes (C ints).
 MAX_SCALE_PX = 1e4

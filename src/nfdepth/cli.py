@@ -345,23 +345,30 @@ def _positive(name: str, value):
 
 def _cmd_stereo(args) -> int:
     from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
-    from .stereo import check_depth_scale, static_stereo
+    from .stereo import check_depth_scale, check_disparity_offset, static_stereo
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
+    principal_point_given = [f"--{k.replace('_', '-')}" for k in ("cx_px", "cy_px") if getattr(args, k) is not None]
     rig = None
     if args.rig:
         from .rig import load_rig, stereo_options_from_rig
 
         rig = load_rig(args.rig)
         opts = stereo_options_from_rig(rig, n_views=len(args.views), n_column_views=len(args.column) if args.column else None)
-        for key in ("focal_px", "baseline", "axis", "positions", "column_positions"):
+        # the rig's value where the file gives none: what it means, and where to set it instead
+        defaults = {"cx_px": "the image centre", "cy_px": "the image centre", "disparity_offset_px": "0"}
+        sections = {"cx_px": "[camera]", "cy_px": "[camera]", "disparity_offset_px": "[stereo]"}
+        for key in ("focal_px", "baseline", "axis", "positions", "column_positions", "disparity_offset_px", "cx_px", "cy_px"):
             if key == "column_positions" and not args.column:
                 continue  # the rig's column is not in use
             given = getattr(args, key)
             if key == "axis" and given == "x":
                 given = None  # the parser's default: the rig decides
             if given is not None and opts.get(key) is not None and given != opts[key]:
+                if key in defaults:
+                    where = f"{defaults[key]} unless the file gives it; set it in the file's {sections[key]}"
+                    raise CLIError(f"--{key.replace('_', '-')} {given:g} contradicts the rig file's {key} = {opts[key]:g} ({where})")
                 raise CLIError(f"--{key.replace('_', '-')} {given} contradicts the rig file's {key} = {opts[key]}")
             if given is None and opts.get(key) is not None:
                 setattr(args, key, opts[key])
@@ -383,6 +390,23 @@ def _cmd_stereo(args) -> int:
             raise CLIError(str(exc)) from None
     if args.ply and focal is None:
         raise CLIError("--ply needs --focal-px and --baseline (a point cloud needs metric depth)")
+    offset = 0.0
+    if args.disparity_offset_px is not None:
+        try:
+            offset = check_disparity_offset("--disparity-offset-px", args.disparity_offset_px)
+        except ValueError as exc:
+            raise CLIError(str(exc)) from None
+    if offset != 0 and focal is None:
+        raise CLIError("--disparity-offset-px changes depth only: give --focal-px and --baseline too (the disparity output is as measured)")
+    if offset != 0 and args.column:
+        raise CLIError("--disparity-offset-px applies to one row: with --column the row and the column would each need their own offset")
+    if principal_point_given and not args.ply:
+        verb = "place" if len(principal_point_given) > 1 else "places"
+        raise CLIError(f"{' and '.join(principal_point_given)} {verb} the points of --ply: give --ply too (depth itself does not use them)")
+    for key in ("cx_px", "cy_px"):
+        value = getattr(args, key)
+        if value is not None and not np.isfinite(value):
+            raise CLIError(f"--{key.replace('_', '-')} must be a finite number of pixels, got {value:g}")
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
     cost_step = _positive("--cost-step-px", args.cost_step_px)
@@ -436,6 +460,13 @@ def _cmd_stereo(args) -> int:
         )
     if rig is not None:
         rig.check_image_shape(views[0].shape)
+    if args.ply:
+        from .camera import PinholeCamera
+
+        try:  # the camera's own check of the principal point against these images
+            PinholeCamera(focal, views[0].shape[1], views[0].shape[0], args.cx_px, args.cy_px)
+        except ValueError as exc:
+            raise CLIError(f"--{exc}".replace("--cx_px", "--cx-px").replace("--cy_px", "--cy-px")) from None
     options = {}
     if args.sigma_px is not None:
         options["sigma_px"] = args.sigma_px
@@ -474,7 +505,7 @@ def _cmd_stereo(args) -> int:
     std = result.uncertainty
     unit = "px"
     if focal is not None:
-        values = result.depth(focal_px=focal, baseline=baseline)
+        values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
         with np.errstate(divide="ignore", invalid="ignore"):
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)
@@ -495,7 +526,7 @@ def _cmd_stereo(args) -> int:
         k += 1
     if args.ply:
         cam_ref = read_image(args.views[reference], grey=False, dtype=None)
-        pts, cols = depth_to_points(values, focal_px=focal, image=to_rgb8(cam_ref))  # 16-bit, float: scaled to 0..255
+        pts, cols = depth_to_points(values, focal_px=focal, cx_px=args.cx_px, cy_px=args.cy_px, image=to_rgb8(cam_ref))  # 16-bit, float: scaled to 0..255
         write_ply(outputs[k], pts, colors=cols, force=args.force)
     valid = np.isfinite(values)
     kind = "depth" if focal is not None else "disparity"
@@ -590,6 +621,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--column-positions", type=float, nargs="+", metavar="P", help="camera positions along the column, in the unit of --positions (default 0 1 2 ...)")
     p.add_argument("--focal-px", type=float, metavar="F", help="focal length in pixels (with --baseline: output depth)")
     p.add_argument("--baseline", type=float, metavar="B", help="distance between neighbouring views (scene units)")
+    offset_help = "with --focal-px and --baseline: depth = F B / (disparity + D), D in px per unit of position, for cameras whose principal points differ along the row (Middlebury's doffs; default 0)"
+    p.add_argument("--disparity-offset-px", type=float, metavar="D", help=offset_help)
+    p.add_argument("--cx-px", type=float, metavar="CX", help="principal point column for --ply (default: the image centre)")
+    p.add_argument("--cy-px", type=float, metavar="CY", help="principal point row for --ply (default: the image centre)")
     p.add_argument("--edges-only", action="store_true", help="the paper's sparse output: edge points only")
     p.add_argument(
         "--fill",
@@ -618,7 +653,7 @@ def build_parser() -> argparse.ArgumentParser:
         "at 640x480, same edge precision, coarser dense values (README: 'Faster, with coarser candidates')",
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
-    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, baseline, axis, positions, disparity range (docs/rig-format.md)")
+    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, principal point, baseline, axis, positions, disparity range and offset (docs/rig-format.md)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
 

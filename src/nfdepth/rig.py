@@ -21,6 +21,7 @@ documented in ``docs/rig-format.md``; in short::
     baseline  = 2.0               # spacing of neighbouring views (scene units)
     axis      = "x"               # or direction = [1, 0, 0]
     # positions = [0, 1, 2.5]     # in units of the baseline
+    # disparity_offset_px = 31.1  # principal points differ along the row: depth = f b / (d + offset)
 
     [video]                       # single moving camera (nfdepth video)
     velocity = [0.5, 0.0, 0.0]    # camera translation per frame (scene units)
@@ -47,7 +48,11 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import UNIT_SCALE_RANGE
+from ._validate import (
+    DISPARITY_OFFSET_EXPECTED,
+    MAX_DISPARITY_OFFSET_PX,
+    UNIT_SCALE_RANGE,
+)
 from .camera import (
     MAX_ROTATION_PER_FRAME_DEG,
     PinholeCamera,
@@ -375,6 +380,12 @@ class StereoSpec:
         Smallest and largest disparity to search, in px per unit position
         (``disparity_range_px`` of :func:`nfdepth.stereo.static_stereo`,
         ``nfdepth stereo --disparity-range``).
+    disparity_offset_px : float
+        Added to the measured disparity before depth, in px per unit
+        position (``disparity_offset_px`` of
+        :meth:`nfdepth.stereo.StereoResult.depth`, ``nfdepth stereo
+        --disparity-offset-px``): where the row's cameras' principal points
+        differ along it, as in Middlebury's ``doffs`` (default 0).
     """
 
     baseline: float
@@ -383,6 +394,7 @@ class StereoSpec:
     positions: tuple | None = None
     column_positions: tuple | None = None
     disparity_range_px: tuple | None = None
+    disparity_offset_px: float = 0.0
 
     def __eq__(self, other) -> bool:
         return (
@@ -393,6 +405,7 @@ class StereoSpec:
             and self.positions == other.positions
             and self.column_positions == other.column_positions
             and self.disparity_range_px == other.disparity_range_px
+            and self.disparity_offset_px == other.disparity_offset_px
         )
 
 
@@ -599,7 +612,7 @@ def check_crossings(crossings) -> tuple:
 
 
 def _parse_stereo(table) -> StereoSpec:
-    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions", "disparity_range_px"))
+    t = _check_keys(table, "stereo", ("baseline", "axis", "direction", "positions", "column_positions", "disparity_range_px", "disparity_offset_px"))
     baseline = _number(t, "stereo", "baseline", positive=True)
     _check_scale("stereo.baseline", t["baseline"], baseline, "a baseline")
     which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
@@ -625,7 +638,15 @@ def _parse_stereo(table) -> StereoSpec:
         if not ok or not r[0] < r[1]:
             raise _fail("stereo.disparity_range_px", r, "[smallest, largest] disparity in px per unit position, two finite numbers, smallest first")
         disparity_range = (float(r[0]), float(r[1]))
-    return StereoSpec(baseline, direction, axis, positions, column_positions, disparity_range)
+    offset = 0.0
+    if "disparity_offset_px" in t:
+        v = t["disparity_offset_px"]
+        if not (_is_number(v) and abs(v) <= MAX_DISPARITY_OFFSET_PX):
+            raise _fail("stereo.disparity_offset_px", v, DISPARITY_OFFSET_EXPECTED)
+        if column_positions is not None and v != 0:
+            raise _fail("stereo.disparity_offset_px", v, "0 with column_positions (the row and the column would each need their own offset)")
+        offset = float(v)
+    return StereoSpec(baseline, direction, axis, positions, column_positions, disparity_range, offset)
 
 
 def _stereo_positions(t: dict, key: str):
@@ -766,6 +787,8 @@ def rig_to_toml(rig: Rig) -> str:
             lines.append(f"column_positions = {_toml_value(s.column_positions)}")
         if s.disparity_range_px is not None:
             lines.append(f"disparity_range_px = {_toml_value(s.disparity_range_px)}")
+        if s.disparity_offset_px:
+            lines.append(f"disparity_offset_px = {_toml_value(s.disparity_offset_px)}")
     if rig.video is not None:
         v = rig.video
         lines += ["", "[video]"]
@@ -786,7 +809,9 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
     """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
 
     Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
-    column_positions=list|None, disparity_range_px=list|None)``.
+    column_positions=list|None, disparity_range_px=list|None,
+    disparity_offset_px=float, cx_px=float, cy_px=float)`` (the principal
+    point is the camera's, the image centre where the file gives none).
     :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
     a ``direction`` must be one of those.
 
@@ -817,6 +842,9 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
         "positions": list(s.positions) if s.positions is not None else None,
         "column_positions": list(s.column_positions) if s.column_positions is not None else None,
         "disparity_range_px": list(s.disparity_range_px) if s.disparity_range_px is not None else None,
+        "disparity_offset_px": float(s.disparity_offset_px),
+        "cx_px": float(rig.camera.cx_px),
+        "cy_px": float(rig.camera.cy_px),
     }
 
 

@@ -290,13 +290,13 @@ from ._cost_volume import _box, _match_features, best_disparity
 from ._quantile import median, percentile, percentiles
 from ._resample import remap_linear
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_message, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, gaussian_smooth
 from .pipelines import _noise_level
 
-__all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background", "check_depth_scale"]
+__all__ = ["StereoResult", "static_stereo", "auto_levels", "fill_background", "check_depth_scale", "check_disparity_offset"]
 
 # The matched stencil's weights as its float32 arithmetic uses them (the compiled pair stencil).
 _STENCIL_NEAR, _STENCIL_WIDE = np.float32(_MATCHED_NEAR), np.float32(_MATCHED_WIDE)
@@ -476,10 +476,7 @@ class StereoResult:
             unknown or ``d + offset <= 0``.
         """
         f, b = check_depth_scale(focal_px, baseline)
-        off = float(disparity_offset_px)
-        if not np.isfinite(off):
-            msg = f"disparity_offset_px must be finite, got {disparity_offset_px!r}"
-            raise ValueError(msg)
+        off = check_disparity_offset("disparity_offset_px", disparity_offset_px)
         total = self.disparity.astype(np.float64) + off
         with np.errstate(divide="ignore", invalid="ignore"):
             z = f * b / total
