@@ -1,6 +1,7 @@
 """Coarse-to-fine multi-view static stereo (nfdepth.stereo)."""
 
 import itertools
+import math
 import warnings
 
 import numpy as np
@@ -770,14 +771,27 @@ def test_numba_streaming_wta_matches_full_volume():
 
 
 @pytest.mark.parametrize(
-    ("positions", "interleave"),
-    [((0, 1, 2), False), ((0, 1, 2, 3, 4), False), ((0, 1, 3), False), ((0, 2, 3, 4, 5), False), ((0.0, 1.3, 2.0), False), ((0, 1, 2), True), ((0, 1, 3), True)],
+    ("positions", "interleave", "shift_px"),
+    [
+        ((0, 1, 2), False, math.nan),
+        ((0, 1, 2, 3, 4), False, math.nan),
+        ((0, 1, 3), False, math.nan),
+        ((0, 2, 3, 4, 5), False, math.nan),
+        ((0.0, 1.3, 2.0), False, math.nan),
+        ((0, 1, 2), True, math.nan),
+        ((0, 1, 3), True, math.nan),
+        ((0, 1, 3), False, 0.5),
+        ((0, 2, 3, 4, 5), False, 0.5),
+        ((0, 1, 3), True, 0.5),
+    ],
 )
-def test_cost_volume_numba_matches_numpy(positions, interleave, monkeypatch):
+def test_cost_volume_numba_matches_numpy(positions, interleave, shift_px, monkeypatch):
     """The fused numba cost volume gives the NumPy/OpenCV reference's winner, cost and uniqueness.
 
     (0, 1, 3), (0, 2, 3, 4, 5) and (0, 1.3, 2) reach unequally far on the two
-    sides, so the views of both sides compete too (``_both_sides``).
+    sides, so the views of both sides compete too (``_both_sides``); a
+    ``shift_px`` of 0.5 raises the one-sided cost where both sides see the
+    point (``_near_side_gain``).
 
     Integer positions put every candidate shift on the quarter-pixel grid, where
     cv2.warpAffine's 1/32-px fixed-point weights are exact: the two agree to
@@ -797,7 +811,7 @@ def test_cost_volume_numba_matches_numpy(positions, interleave, monkeypatch):
     spread = float(np.percentile(views[ref], 99) - np.percentile(views[ref], 1))
     guide = ((views[ref] - np.percentile(views[ref], 1)) / spread).astype(np.float32)
     cand = np.arange(-1.0, 8.01, 0.25) if interleave else np.arange(-1.0, 8.0, 0.5)  # interleaved: the grid and its midpoints
-    kw = dict(radius=4, eps=1e-4, tau_i=0.03 * spread, tau_g=0.01 * spread, alpha=0.9, exclude_px=1.0, interleave=interleave)
+    kw = dict(radius=4, eps=1e-4, tau_i=0.03 * spread, tau_g=0.01 * spread, alpha=0.9, exclude_px=1.0, interleave=interleave, shift_px=shift_px)
     out = {}
     for use in (False, True):
         monkeypatch.setattr(fast, "USE_NUMBA", use)

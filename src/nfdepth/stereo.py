@@ -67,7 +67,14 @@ measurement in a coarse-to-fine warping scheme:
    from the reference, 4 grey levels of noise: median 2.8 -> 0.85 %, pixels
    > 10 % off 14.6 -> 2.4 %; Middlebury's seven views around view 1: edge
    bad-1px 1.3-5.1 % -> 1.2-4.9 %; equal rows unchanged, where the same
-   competition cost 0.1-0.8 points). The candidates are ``cost_step_px``
+   competition cost 0.1-0.8 points). Where the shorter side shifts the
+   scene by a median of less than 2 px, its cost curve is so flat that
+   noise still let it win against that penalty: where both sides see the
+   point the penalty then grows, up to 3 times at 2/3 px and below
+   (:func:`nfdepth._cost_volume._near_side_gain`; views -0.2 and 2 at 1
+   grey level of noise: median 1.07 -> 0.28 %, the far view alone 0.22 %;
+   no real row here shifts the scene that little, at full size or
+   downsampled by 2-6, and none changed). The candidates are ``cost_step_px``
    apart in the nearest view, finer where it shifts the scene by a median
    of less than 4 px and a farther view exists (:func:`_candidate_step`:
    the winner's sub-sample bias is about 0.1 steps, so a near view's small
@@ -1422,12 +1429,15 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
 
 
-def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, spread, textured, min_cost_margin):
+def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, shift_px, spread, textured, min_cost_margin):
     """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share, at_end, bias_px)``.
 
     ``step`` is the spacing of the search's grid; with ``interleave`` the
     candidates include the midpoints between, for the sub-sample fit alone
-    (:func:`_candidate_step`).
+    (:func:`_candidate_step`); ``shift_px`` is the nearest view's median
+    shift (px per unit of ``t``; NaN: unknown), which raises the one-sided
+    penalty of a nearer side that shifts the scene little
+    (:func:`nfdepth._cost_volume._both_sides`).
     ``at_end`` marks the winners at an end of the range that ``ends`` (lower,
     upper) rejects; ``share`` is the share of the textured pixels with no
     unique match inside the range: ambiguous (cost margin below
@@ -1443,7 +1453,7 @@ def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, inter
     else:
         interleave = False
     # streamed slice by slice: memory O(pixels), not O(pixels x candidates)
-    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, interleave=interleave, **match)
+    d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, interleave=interleave, shift_px=shift_px, **match)
     # uniqueness: the best cost against the best one more than 1 px away
     margin = _cost_margin(c_best, c_second, spread)
     at_end = ((d <= np.float32(candidates[0])) & ends[0]) | ((d >= np.float32(candidates[-1])) & ends[1])
@@ -1876,7 +1886,7 @@ def static_stereo(
                 finite = d[np.isfinite(d)]
                 shift = median(np.abs(finite)) if finite.size else math.nan
             step_px, interleave = _candidate_step(cost_step_px, float(np.max(np.abs(t))), shift, lo, hi)
-            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
+            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "shift_px": shift, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
             # A winner at an end of the range is no minimum: its match lies
             # outside the range (UNCERTAIN). So are the ends 2 px beyond the
             # field's robust extremes and the extra step beyond a given range's;
