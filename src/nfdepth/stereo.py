@@ -473,8 +473,10 @@ class StereoResult:
         baseline : float
             Camera spacing per unit of position (scene units).
         disparity_offset_px : float
-            Added to the disparity first (e.g. Middlebury's ``dmin`` for
-            cropped images, in px per unit position).
+            Added to the disparity first, in px per unit position: the
+            difference of the cameras' principal points along the row
+            (Middlebury 2014's ``doffs``; ``dmin`` for cropped 2005 images),
+            within +-1e6 px (``nfdepth stereo --disparity-offset-px``).
 
         Returns
         -------
