@@ -92,7 +92,7 @@ def test_rotation_degrees_converted_to_radians():
     np.testing.assert_allclose(m.rotation, [0.0, 0.0, -np.deg2rad(0.5)])
 
 
-@pytest.mark.parametrize("path", [PAPER_RIG, RAIL_RIG, EXAMPLES / "passing_cameras_rig.toml"])
+@pytest.mark.parametrize("path", [PAPER_RIG, RAIL_RIG, EXAMPLES / "passing_cameras_rig.toml", EXAMPLES / "rectified_pair_rig.toml"])
 def test_round_trip_examples(path):
     rig = load_rig(path)
     again = rig_from_dict(tomllib.loads(rig_to_toml(rig)))
