@@ -570,6 +570,48 @@ def test_tsukuba_edge_points():
 
 
 @pytest.mark.data
+@pytest.mark.parametrize(("scene", "views", "before", "most"), [("motorcycle", None, 2.36, 1.35), ("middlebury2005/Books", [1, 2], 2.66, 1.6)])
+def test_two_views_edge_points_report_their_model_error(scene, views, before, most):
+    """A pair leaves the edge points no residuals: their std counts the scatter about the dense field instead.
+
+    Median |error| / std at the edge points against the truth (0.67 for calibrated Gaussian errors): Motorcycle
+    (sub-pixel truth) 2.36 -> 1.02, the Books pair 2.66 -> 1.37 (its truth rounded to 1/8 px: three views give
+    1.35). The disparities and the edge points are those of before; rows of three views or more are unchanged.
+    """
+    from nfdepth import datasets
+
+    sc = datasets.load_scene(scene, _data_root())
+    v = sc.views if views is None else [sc.views[k] for k in views]
+    ref = sc.reference_index if views is None else views.index(sc.reference_index)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the pair's border band
+        r = static_stereo(v, reference=ref)
+    sel = r.edge_mask & r.valid & np.isfinite(sc.disparity)
+    z = np.abs(r.disparity[sel] - sc.disparity[sel]) / r.uncertainty[sel]
+    assert sel.sum() > 10000
+    assert 0.5 < np.median(z) < most < before
+
+
+def test_scatter_factor_compares_the_scatter_with_the_std():
+    """Points along a line whose differences from the dense field scatter 3 times their std get a factor near 3;
+    a scatter at the std gives 1 (never below), and a point with too few neighbours keeps its std."""
+    from nfdepth.stereo import _scatter_factor
+
+    rng = np.random.default_rng(0)
+    n = 400
+    er = np.full(n, 50)
+    ec = np.arange(n) + 20
+    std = np.full(n, 0.02, np.float32)
+    ok = np.ones(n, bool)
+    wide = _scatter_factor(rng.normal(0.3, 0.06, n).astype(np.float32), std, ok, er, ec, (100, 460), 4.0)
+    assert 2.4 < np.median(wide) < 3.6  # the common offset 0.3 is the dense field's, not scatter
+    narrow = _scatter_factor(rng.normal(0.0, 0.01, n).astype(np.float32), std, ok, er, ec, (100, 460), 4.0)
+    assert np.all(narrow == 1.0)
+    alone = _scatter_factor(np.array([0.5], np.float32), np.array([0.02], np.float32), np.array([True]), np.array([50]), np.array([50]), (100, 100), 4.0)
+    assert alone[0] == 1.0
+
+
+@pytest.mark.data
 def test_middlebury2005_art_three_and_seven_views():
     """Art (Middlebury 2005, half size), reference view1, against SGBM (view1, view2) at the same points.
 
