@@ -171,11 +171,21 @@ def test_rectifying_orientation_is_a_rotation_along_the_path():
     assert rect[:, 2] @ mid[:, 2] > 0.9  # the optical axis nearest the middle frame's
 
 
-def test_a_middle_position_off_the_line_is_reported():
+@pytest.mark.parametrize(
+    ("axis", "effect"),
+    [
+        (1, r"\(across the path, it misaligns the rectified views vertically\)"),
+        (2, r"\(along the optical axis, it changes the middle view's scale\)"),
+    ],
+    ids=["across", "ahead"],
+)
+def test_a_middle_position_off_the_line_is_reported(axis, effect):
+    """Off the line across the path (Y) the rectified views are misaligned vertically; along the optical axis (Z) the
+    middle view's scale changes (the warning used to call both a vertical misalignment)."""
     frames, _, positions, orientations = _film((1.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     positions = positions.copy()
-    positions[1, 1] = 0.05  # 5 % of the step
-    with pytest.warns(UserWarning, match=r"lies up to 5 % of the step off the line through its neighbours' positions"):
+    positions[1, axis] = 0.05  # 5 % of the step
+    with pytest.warns(UserWarning, match=r"lies up to 5 % of the step off the line through its neighbours' positions: .*" + effect):
         _dense(frames, positions, orientations)
 
 

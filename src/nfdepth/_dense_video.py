@@ -64,13 +64,18 @@ class DenseTriple:
     unknown); ``covered``: the fraction of the middle frame's pixels the
     rectified canvas holds (1 unless the path points near the optical
     axis); ``off_line``: how far the middle position lies off the line
-    through the outer two, relative to half their distance.
+    through the outer two, relative to half their distance;
+    ``off_line_ahead``: the part of that along the rectified optical axis
+    (it changes the middle view's scale; the rest, across the path in the
+    image plane, misaligns the rectified views vertically). 0 without a
+    rectification.
     """
 
     rho: np.ndarray
     rho_std: np.ndarray
     covered: float
     off_line: float
+    off_line_ahead: float = 0.0
 
 
 def rectifying_orientation(mid_rotation, path) -> np.ndarray | None:
@@ -140,10 +145,12 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     length = float(np.linalg.norm(path))
     along = path / length
     s1 = float(along @ (p1 - p0))
-    off_line = float(np.linalg.norm(p1 - p0 - s1 * along)) / (length / 2.0)
+    offset = p1 - p0 - s1 * along
+    off_line = float(np.linalg.norm(offset)) / (length / 2.0)
     rect = rectifying_orientation(rotations[1], path)
     if rect is None:
         return DenseTriple(nan, nan.copy(), 0.0, off_line)
+    off_ahead = abs(float(rect[:, 2] @ offset)) / (length / 2.0)
     # the views in their order along the path; an outer one where the middle one is adds nothing
     along_path = [0.0, s1, length]
     order = sorted((j for j in range(3) if j == 1 or abs(along_path[j] - s1) > _SAME_PLACE * length), key=along_path.__getitem__)
@@ -180,4 +187,4 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     rho[on] = rho_rect[rr, cc] * ray[2][on]
     std[on] = std_rect[rr, cc] * ray[2][on]
     std[np.isnan(rho)] = np.nan
-    return DenseTriple(rho, std, float(on.mean()), off_line)
+    return DenseTriple(rho, std, float(on.mean()), off_line, off_ahead)

@@ -79,6 +79,7 @@ relative to the reference one at the crossings (the same at every crossing),
 from __future__ import annotations
 
 import glob as _glob
+import math
 import os
 import re
 import warnings
@@ -520,6 +521,17 @@ def _vec(v) -> str:
     return "(" + ", ".join(f"{float(x) + 0.0:g}" for x in v) + ")"
 
 
+def _off_line_effect(off: float, ahead: float) -> str:
+    """What a middle position ``off`` (share of the step) off the line does to a dense map, ``ahead`` of it along the optical axis."""
+    across = math.sqrt(max(off * off - ahead * ahead, 0.0))
+    parts = []
+    if across >= 0.25 * off:
+        parts.append("across the path, it misaligns the rectified views vertically")
+    if ahead >= 0.25 * off:
+        parts.append("along the optical axis, it changes the middle view's scale")
+    return "; ".join(parts)
+
+
 def _frame_list(frames: list[int], most: int = 6) -> str:
     """``[1, 2, 3, 7]`` -> ``"1-3, 7"`` (at most ``most`` runs, then ``...``)."""
     runs: list[list[int]] = []
@@ -802,6 +814,7 @@ def depth_from_video(
     covered = 1.0  # the least of it
     bent_frames: list[int] = []  # dense: frames off the line through their neighbours
     bent = 0.0  # the most
+    bent_ahead = 0.0  # the most of it along the optical axis
     fastest = 0.0
     uneven_frames: list[int] = []  # levels=1: frames whose steps before and after differ by more than _UNEVEN_PX of motion
     unevenest = 0.0
@@ -919,6 +932,7 @@ def depth_from_video(
                 if dt.off_line > _MAX_OFF_LINE:
                     bent_frames.append(k)
                     bent = max(bent, dt.off_line)
+                    bent_ahead = max(bent_ahead, dt.off_line_ahead)
         else:
             static.append(k)
 
@@ -1014,7 +1028,7 @@ def depth_from_video(
         warnings.warn(
             f"in {len(bent_frames)} of {triples} frames ({_frame_list(bent_frames)}) the middle position lies up to"
             f" {100 * bent:.0f} % of the step off the line through its neighbours' positions: their dense maps take it as on"
-            " that line (its error is a vertical misalignment of the rectified views)",
+            f" that line ({_off_line_effect(bent, bent_ahead)})",
             UserWarning,
             stacklevel=2,
         )
