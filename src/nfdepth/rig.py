@@ -50,8 +50,8 @@ import numpy as np
 
 from ._validate import (
     DISPARITY_OFFSET_EXPECTED,
-    MAX_DISPARITY_OFFSET_PX,
     UNIT_SCALE_RANGE,
+    check_disparity_offset,
 )
 from .camera import (
     MAX_ROTATION_PER_FRAME_DEG,
@@ -641,11 +641,12 @@ def _parse_stereo(table) -> StereoSpec:
     offset = 0.0
     if "disparity_offset_px" in t:
         v = t["disparity_offset_px"]
-        if not (_is_number(v) and abs(v) <= MAX_DISPARITY_OFFSET_PX):
-            raise _fail("stereo.disparity_offset_px", v, DISPARITY_OFFSET_EXPECTED)
-        if column_positions is not None and v != 0:
+        try:
+            offset = check_disparity_offset("stereo.disparity_offset_px", v)
+        except (TypeError, ValueError):
+            raise _fail("stereo.disparity_offset_px", v, DISPARITY_OFFSET_EXPECTED) from None
+        if column_positions is not None and offset != 0:
             raise _fail("stereo.disparity_offset_px", v, "0 with column_positions (the row and the column would each need their own offset)")
-        offset = float(v)
     return StereoSpec(baseline, direction, axis, positions, column_positions, disparity_range, offset)
 
 

@@ -1054,6 +1054,17 @@ _MIN_SIZE_PX = 3  # smallest view side: the 2 x 2 cell stencils and the edge tes
 _SIDE_REACH = 2  # px either side of an edge point that tell the two sides of a depth step
 
 
+def _pooled_at_points(values, er, ec, shape, window_px):
+    """``values`` of the points ``(er, ec)`` summed over their neighbours with Gaussian weights of ``window_px`` (:func:`_blur`), at the points.
+
+    ``values``: one per point, or a row of up to 4 per point (one blur of that many channels).
+    """
+    values = np.asarray(values)
+    plane = np.zeros((*shape, *values.shape[1:]), np.float32)
+    plane[er, ec] = values
+    return _blur(plane, window_px)[er, ec]
+
+
 def _scatter_factor(diff, std, ok, er, ec, shape, window_px):
     """Per edge point: how much wider its errors are than its std says, from its neighbours' scatter (at least 1).
 
@@ -1066,10 +1077,9 @@ def _scatter_factor(diff, std, ok, er, ec, shape, window_px):
     residuals to show the model error (:func:`static_stereo`, edge points).
     1 where fewer than about three accepted points are near.
     """
-    sums = np.zeros((*shape, 4), np.float32)  # weight, diff, diff^2, std^2: one 4-channel blur
     x = np.where(ok, diff, 0.0).astype(np.float32)
-    sums[er, ec] = np.stack([ok, x, x * x, np.where(ok, std * std, 0.0)], axis=1)
-    w, xs, x2s, vs = np.moveaxis(_blur(sums, window_px)[er, ec], 1, 0)
+    channels = np.stack([ok, x, x * x, np.where(ok, std * std, 0.0)], axis=1)  # one 4-channel blur
+    w, xs, x2s, vs = np.moveaxis(_pooled_at_points(channels, er, ec, shape, window_px), 1, 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         mean = xs / w
         scatter = x2s / w - mean * mean
@@ -2026,12 +2036,8 @@ def static_stereo(
             cos = np.abs(m.grad_col[er, ec]) / g_mag
             v_e = s_c**2 / (g_e**2 * stt_e)
             # model error from the edge points' own residuals, pooled over neighbouring edge points
-            chi_map = np.zeros((h, w), np.float32)
-            dof_map = np.zeros((h, w), np.float32)
-            chi_map[er, ec] = chi2_e / s_c**2
-            dof_map[er, ec] = np.maximum(dof_e, 0.0)
-            pooled_dof = _blur(dof_map, dense_window_px)[er, ec]
-            red_e = (_blur(chi_map, dense_window_px)[er, ec] / pooled_dof)
+            pooled_dof = _pooled_at_points(np.maximum(dof_e, 0.0), er, ec, (h, w), dense_window_px)
+            red_e = _pooled_at_points(chi2_e / s_c**2, er, ec, (h, w), dense_window_px) / pooled_dof
         red_e = np.where(np.isfinite(red_e), np.maximum(red_e, 1.0), 1.0)
         std_e = np.sqrt(v_e * red_e)
         r_e = np.full(er.size, Reason.OK, np.uint8)
