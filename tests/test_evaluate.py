@@ -13,6 +13,7 @@ from nfdepth import baselines
 from nfdepth.cli import main
 from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
 from nfdepth.evaluate import (
+    GAUSSIAN_MEDIAN_Z,
     depth_step_mask,
     disparity_errors,
     error_map_png,
@@ -71,6 +72,34 @@ def test_disparity_errors_exact_values():
             disparity_errors(est, truth, truth_step_px=bad)
     with pytest.raises(TypeError, match="truth_step_px must be a finite number >= 0 or None, got 'fine'"):
         disparity_errors(est, truth, truth_step_px="fine")
+
+
+def test_median_z_of_a_calibrated_error_bar_is_a_gaussians():
+    """Errors drawn with the std the map reports: median |z| 0.674 and 99.7 % within 3 std (200k points: +-1 %).
+    A std half the errors' reads twice that; a truth rounded to a step with an exact estimate and a std of 0
+    reads the uniform rounding error over its own std, (step / 4) / (step / sqrt(12)) = 0.866."""
+    rng = np.random.default_rng(5)
+    truth = rng.uniform(5.0, 20.0, (400, 500))
+    std = rng.uniform(0.05, 0.3, truth.shape)
+    est = truth + rng.normal(0.0, 1.0, truth.shape) * std
+    e = disparity_errors(est, truth, uncertainty=std)
+    assert e["median_z"] == pytest.approx(GAUSSIAN_MEDIAN_Z, rel=0.01)
+    assert e["within_3std"] == pytest.approx(0.9973, abs=0.001)
+    narrow = disparity_errors(est, truth, uncertainty=std / 2)
+    assert narrow["median_z"] == pytest.approx(2 * GAUSSIAN_MEDIAN_Z, rel=0.01)
+    assert math.isnan(disparity_errors(est, truth)["median_z"]) and math.isnan(disparity_errors(est, truth)["within_3std"])
+    step = 0.125
+    rounded = np.round(truth / step) * step
+    r = disparity_errors(truth, rounded, truth_step_px=step, uncertainty=np.zeros(truth.shape))
+    assert r["median_z"] == pytest.approx(np.sqrt(12.0) / 4, rel=0.01)
+    assert r["within_3std"] == 1.0  # a uniform error never exceeds sqrt(3) of its std
+    # only points with a finite std count; an exact estimate with a std of 0 has z = 0
+    part = disparity_errors(np.array([[1.0, 2.0, 3.5]]), np.array([[1.0, 2.0, 3.0]]), uncertainty=np.array([[0.0, np.nan, 0.1]]))
+    assert part["points"] == 3 and part["median_z"] == pytest.approx(2.5) and part["within_3std"] == 0.5
+    with pytest.raises(ValueError, match=r"uncertainty must have the shape of truth \(400, 500\), got \(2, 2\)"):
+        disparity_errors(est, truth, uncertainty=np.ones((2, 2)))
+    with pytest.raises(ValueError, match="uncertainty must be a standard deviation"):
+        disparity_errors(est, truth, uncertainty=-std)
 
 
 def test_rounding_floor_of_one_disparity_is_a_quarter_step():
@@ -624,7 +653,7 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
     keys = {
         "points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
-        "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+        "median_z", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
     }
     assert res["truth_step_px"] == 1.0  # whole-pixel labels
     assert "stored in steps of 1 px" in out and "bias px" in out and "near a depth step" in out and "bad>1 off" in out
@@ -642,6 +671,13 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
         d = entry["dense"]
         mix = d["near_steps_share"] * d["bad_1px_near_steps"] + (1 - d["near_steps_share"]) * d["bad_1px_off_steps"]
         assert mix == pytest.approx(d["bad_1px"], abs=1e-12)
+    # nfdepth's error bar against the whole-pixel truth (its rounding in quadrature): measured 0.60 at the edge
+    # points, 1.0 dense; the peers report no std
+    assert "err/std" in out
+    nf = res["methods"]["nfdepth"]
+    assert GAUSSIAN_MEDIAN_Z / 1.5 < nf["edges"]["median_z"] < GAUSSIAN_MEDIAN_Z * 1.5 and nf["edges"]["within_3std"] > 0.9
+    assert nf["dense"]["median_z"] < 2 * GAUSSIAN_MEDIAN_Z and nf["filled"]["median_z"] is None
+    assert res["methods"]["sgbm"]["dense"]["median_z"] is None and res["methods"]["sgbm"]["nfdepth_at_shared_edges"]["median_z"] > 0
     assert len(list((tmp_path / "maps").glob("tsukuba_3views_*.png"))) == 3
     assert res["stereo_options"] == {}
 
@@ -684,7 +720,7 @@ def test_nfdepth_is_also_scored_on_the_points_a_peer_shares(monkeypatch):
     for peer in ("sgbm", "waxman_sinha"):
         shared = res["methods"][peer]["nfdepth_at_shared_edges"]
         mask = edges & np.isfinite(res["maps"][peer])
-        expected = disparity_errors(res["maps"]["nfdepth"], truth, mask=mask, near_steps=depth_step_mask(truth))
+        expected = disparity_errors(res["maps"]["nfdepth"], truth, mask=mask, near_steps=depth_step_mask(truth), uncertainty=res["uncertainty"])
         assert shared.keys() == expected.keys()
         assert all(shared[k] == expected[k] or (math.isnan(shared[k]) and math.isnan(expected[k])) for k in expected)
         assert shared["points"] == res["methods"][peer]["edges"]["points"]

@@ -24,7 +24,9 @@ def register(sub, CLIError) -> None:
         help="nfdepth vs SGBM and Waxman-Sinha (relative optical flow) against ground truth",
         description=(
             "Run nfdepth's static stereo and its peers on real scenes with ground truth and print, per scene, "
-            "points, density, median and p90 relative disparity error, bad >1 px and >0.5 px, MAE and runtime: "
+            "points, density, median and p90 relative disparity error, bad >1 px and >0.5 px, bias, runtime and, for "
+            "nfdepth, how honest its error bar is (err/std: the median of |error| / std with the truth's rounding in "
+            "quadrature; 0.67 when calibrated, more when too narrow): "
             "nfdepth at its edge points and dense, each peer at the same edge points and dense."
         ),
     )
@@ -92,16 +94,18 @@ def _fmt_table(res) -> str:
         + "".join(f"; nfdepth {key} = {value:g}" for key, value in sorted(res.get("stereo_options", {}).items())),
         (
             f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
-            f"{'bias px':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
+            f"{'bias px':>7} {'err/std':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
         ),
     ]
     for method, label, e, runtime_s in evaluation_rows(res):
         label = f"{method} ({label})"
         bias = e.get("bias_px", float("nan"))
+        z = e.get("median_z")
+        z = float("nan") if z is None else z
         lines.append(
             f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e.get('truth_rounding_rel'), 2):>8} "
             f"{pct(e['p90_rel'], 2):>7} {pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} "
-            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
+            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {'      -' if math.isnan(z) else format(z, '7.2f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
             f"{runtime_s:>7.3f}s"
         )
     return "\n".join(lines)

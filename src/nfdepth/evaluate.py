@@ -53,6 +53,7 @@ __all__ = [
     "METHODS",
     "DEFAULT_METHODS",
     "disparity_errors",
+    "GAUSSIAN_MEDIAN_Z",
     "rounding_median_rel",
     "depth_step_mask",
     "photometric_truth_offset",
@@ -71,14 +72,16 @@ METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")
 DEFAULT_METHODS = ("nfdepth", "sgbm", "waxman_sinha")
 _ERROR_KEYS = (
     "points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
-    "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+    "median_z", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
 )
+#: median |z| of a standard normal: what ``median_z`` of a calibrated error bar reads
+GAUSSIAN_MEDIAN_Z = 0.6744897501960817
 
 
 # ------------------------------------------------------------------ one map
 
 
-def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_steps=None) -> dict:
+def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_steps=None, uncertainty=None) -> dict:
     """Error figures of a disparity map against the ground truth.
 
     Parameters
@@ -94,6 +97,9 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
     near_steps : array_like of bool, shape (H, W), optional
         Pixels near the truth's depth steps (:func:`depth_step_mask`); gives
         the bad-1px rate at and away from them.
+    uncertainty : array_like, shape (H, W), optional
+        The estimate's standard deviation (px, ``StereoResult.uncertainty``);
+        gives ``median_z`` and ``within_3std``.
 
     Returns
     -------
@@ -109,7 +115,14 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
         above the truth); ``truth_rounding_rel``: the ``median_rel`` that a
         perfect estimate is expected to score on the same points against a
         truth rounded to ``truth_step_px`` (:func:`rounding_median_rel`),
-        NaN without a step; ``near_steps_share``: the share of points in
+        NaN without a step; ``median_z``: the median of ``|d - d_true| /
+        sqrt(std**2 + truth_step_px**2 / 12)`` (the truth's rounding, a
+        uniform error, in quadrature; 0 without a step), which reads
+        :data:`GAUSSIAN_MEDIAN_Z` (0.674) where the error bar is calibrated and
+        the errors Gaussian, more where it is too narrow, and
+        ``within_3std``: the share of those ratios at most 3 (99.7 % for
+        Gaussian errors), over the points with a finite std, NaN without
+        ``uncertainty``; ``near_steps_share``: the share of points in
         ``near_steps``, ``bad_1px_near_steps`` / ``bad_1px_off_steps``: the
         bad-1px rate of the points in / outside it (NaN without
         ``near_steps`` or for an empty part).
@@ -128,6 +141,14 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
         has_truth &= _bool_map("mask", mask, tru.shape)
     if near_steps is not None:
         near_steps = _bool_map("near_steps", near_steps, tru.shape)
+    if uncertainty is not None:
+        std_map = np.asarray(uncertainty, dtype=np.float64)
+        if std_map.shape != tru.shape:
+            msg = f"uncertainty must have the shape of truth {tru.shape}, got {std_map.shape}"
+            raise ValueError(msg)
+        if np.any(std_map < 0):
+            msg = f"uncertainty must be a standard deviation (>= 0 px, NaN where unknown), got a minimum of {np.nanmin(std_map):g}"
+            raise ValueError(msg)
     both = has_truth & np.isfinite(est)
     n_truth = int(has_truth.sum())
     n = int(both.sum())
@@ -147,7 +168,16 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
     out["mae_px"] = float(np.mean(err))
     out["bias_px"] = float(np.median(signed))
     out["truth_rounding_rel"] = rounding_median_rel(t, truth_step_px) if truth_step_px is not None else math.nan
-    out.update({key: math.nan for key in _ERROR_KEYS[-3:]})
+    out.update({key: math.nan for key in _ERROR_KEYS[-5:]})
+    if uncertainty is not None:
+        std = std_map[both]
+        known = np.isfinite(std)
+        if known.any():
+            scale = np.sqrt(std[known] ** 2 + (truth_step_px or 0.0) ** 2 / 12.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = np.where(err[known] == 0.0, 0.0, err[known] / scale)  # an exact estimate with a std of 0: z = 0
+            out["median_z"] = float(np.median(z))
+            out["within_3std"] = float(np.mean(z <= 3.0))
     if near_steps is not None:
         near = near_steps[both]
         out["near_steps_share"] = float(np.mean(near))
@@ -489,7 +519,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         Area-downsample the scene first (:func:`nfdepth.datasets.downsample_scene`).
     keep_maps : bool
         Also return the disparity maps (``"maps"``: method -> ndarray,
-        ``"truth"``, ``"edge_points"``); not JSON-serialisable.
+        ``"truth"``, ``"edge_points"``, ``"uncertainty"``: nfdepth's std map);
+        not JSON-serialisable.
     stereo_options : dict, optional
         Extra keyword arguments for :func:`nfdepth.stereo.static_stereo`.
 
@@ -504,7 +535,8 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         truth's pixels near its depth steps, :func:`depth_step_mask`) and
         ``methods``: method -> ``{"runtime_s", "dense": errors, "edges":
         errors or None}`` (errors as :func:`disparity_errors`, split at the
-        depth steps); nfdepth's also has ``"filled"``: its dense map with
+        depth steps; nfdepth's with ``median_z`` and ``within_3std`` of its
+        ``uncertainty``, the peers' NaN); nfdepth's also has ``"filled"``: its dense map with
         the holes filled from the background (:meth:`StereoResult.filled`,
         every pixel of a line with a value); a peer scored at nfdepth's edge points also
         has ``"nfdepth_at_shared_edges"``: nfdepth's errors at those of its
@@ -552,11 +584,12 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     if "nfdepth" in methods:
         res = static_stereo(sub.views, reference=sub.reference_index, **(stereo_options or {}))
         d = np.asarray(res.disparity, dtype=np.float32)
+        nf_std = res.uncertainty
         edge_points = np.asarray(res.edge_mask, bool) & np.isfinite(d)
         out["methods"]["nfdepth"] = {
             "runtime_s": float(res.runtime_s),
-            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step, near_steps=steps),
-            "dense": disparity_errors(d, truth, truth_step_px=step, near_steps=steps),
+            "edges": disparity_errors(np.where(edge_points, d, np.nan), truth, truth_step_px=step, near_steps=steps, uncertainty=nf_std),
+            "dense": disparity_errors(d, truth, truth_step_px=step, near_steps=steps, uncertainty=nf_std),
             # the dense map with its holes filled from the background (StereoResult.filled)
             "filled": disparity_errors(res.filled()[0], truth, truth_step_px=step, near_steps=steps),
         }
@@ -574,12 +607,13 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
             # nfdepth on exactly the edge points where the peer has a value too:
             # the same point set on both sides (a peer may leave the hard ones out)
             shared = edge_points & np.isfinite(np.asarray(r.disparity, dtype=np.float64))
-            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared, truth_step_px=step, near_steps=steps)
+            out["methods"][m]["nfdepth_at_shared_edges"] = disparity_errors(maps["nfdepth"], truth, mask=shared, truth_step_px=step, near_steps=steps, uncertainty=nf_std)
         maps[m] = r.disparity
     if keep_maps:
         out["maps"] = maps
         out["truth"] = truth
         out["edge_points"] = edge_points
+        out["uncertainty"] = None if edge_points is None else nf_std
     return out
 
 
@@ -723,8 +757,8 @@ def render_markdown(results) -> str:
         results = [results]
     head = (
         "| scene | views | method | points | density | median rel | truth rounding | p90 rel | bad >1 px | bad >0.5 px | MAE px | bias px "
-        "| near a depth step | bad >1 px near / off steps | runtime s |\n"
-        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| median abs(error) / std | near a depth step | bad >1 px near / off steps | runtime s |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     )
     lines = [head]
     for res in results:
@@ -733,7 +767,7 @@ def render_markdown(results) -> str:
             lines.append(
                 f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
                 f"{_rel(e['median_rel'])} | {_rel(e.get('truth_rounding_rel'))} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | "
-                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {_pct(e.get('near_steps_share'))} | "
+                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {_px(e.get('median_z'), '.2f')} | {_pct(e.get('near_steps_share'))} | "
                 f"{_pct(e.get('bad_1px_near_steps'))} / {_pct(e.get('bad_1px_off_steps'))} | {rt:.3f} |"
             )
     return "\n".join(lines)
@@ -742,7 +776,7 @@ def render_markdown(results) -> str:
 def to_jsonable(obj):
     """Results with NaN/inf as None and numpy scalars as Python numbers (maps dropped)."""
     if isinstance(obj, dict):
-        return {k: to_jsonable(v) for k, v in obj.items() if k not in ("maps", "truth", "edge_points")}
+        return {k: to_jsonable(v) for k, v in obj.items() if k not in ("maps", "truth", "edge_points", "uncertainty")}
     if isinstance(obj, (list, tuple)):
         return [to_jsonable(v) for v in obj]
     if isinstance(obj, (np.integer,)):
