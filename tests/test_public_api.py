@@ -20,7 +20,18 @@ SRC = Path(nfdepth.__file__).resolve().parent
 COMMANDS = {
     "demo": ["run_paper_experiment", "static_stereo", "write_array", "write_ply", "depth_to_points", "plot.colormap_panel"],
     "reproduce": ["run_paper_experiment", "plot.save_figure"],
-    "stereo": ["static_stereo", "load_rig", "stereo_options_from_rig", "read_image", "write_array", "write_colormap_png", "write_ply", "plot.colormap_panel"],
+    "stereo": [
+        "static_stereo",
+        "load_rig",
+        "stereo_options_from_rig",
+        "load_cameras",
+        "calibrated_row_depth",
+        "read_image",
+        "write_array",
+        "write_colormap_png",
+        "write_ply",
+        "plot.colormap_panel",
+    ],
     "dynamic": [
         "load_rig",
         "read_image",
@@ -39,7 +50,7 @@ COMMANDS = {
 }
 
 #: Modules of the command line itself (their helpers are CLI glue, not library).
-CLI_MODULES = ("cli", "_cli_rig", "_cli_evaluate", "_cli_fetch")
+CLI_MODULES = ("cli", "_cli_rig", "_cli_evaluate", "_cli_fetch", "_cli_calibrated")
 
 #: Library names a command imports that are not (yet) in their module's __all__.
 #: Each entry is a known gap, to be removed once the module exports the name.

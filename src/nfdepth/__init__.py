@@ -19,7 +19,9 @@ Pipelines (sections 2.3, 3.2, 3.3)
     dynamic_stereo, static_stereo_edges, EdgeDepth
 Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
     static_stereo, StereoResult, fill_background; x and y baselines
-    together: static_stereo_xy, XYStereoResult
+    together: static_stereo_xy, XYStereoResult; a calibrated row of cameras
+    that is not rectified: calibrated_row_depth, CalibratedCamera,
+    load_cameras (module ``rectify``)
 Files
     read_image, write_array, write_colormap_png, read_pfm, write_pfm,
     write_ply, depth_to_points
@@ -32,7 +34,8 @@ command                     functions
 ==========================  ================================================
 ``nfdepth stereo``          static_stereo; with ``--column``:
                             static_stereo_xy; with ``--rig``: load_rig,
-                            stereo_options_from_rig
+                            stereo_options_from_rig; with ``--cameras``:
+                            load_cameras, calibrated_row_depth
 ``nfdepth dynamic I1..I5``  load_rig, dynamic_stereo_from_rig, edge_depth_maps
 ``nfdepth dynamic``         load_rig, read_video, dynamic_stereo_from_videos
 ``--moving-video M``        (:class:`CrossingDepth`), interleaved_frames,
@@ -113,6 +116,9 @@ _LAZY = {
     "fetch_data": "fetch",
     "default_data_dir": "fetch",
     "DataDownloadError": "fetch",
+    "CalibratedCamera": "rectify",
+    "calibrated_row_depth": "rectify",
+    "load_cameras": "rectify",
 }
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
@@ -120,6 +126,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .evaluate import disparity_errors, evaluate_dataset, evaluate_scene
     from .experiments import run_paper_experiment
     from .fetch import DataDownloadError, default_data_dir, fetch_data
+    from .rectify import CalibratedCamera, calibrated_row_depth, load_cameras
     from .rig import Rig, RigError, dynamic_stereo_from_rig, edge_depth_maps, load_rig, stereo_options_from_rig
     from .video import (
         CrossingDepth,

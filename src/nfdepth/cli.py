@@ -349,6 +349,11 @@ def _cmd_stereo(args) -> int:
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
+    if args.cameras:
+        from ._cli_calibrated import run_calibrated_stereo
+        from ._cli_rig import figure_outputs, write_figures
+
+        return run_calibrated_stereo(args, CLIError, check_output=_check_output, figure_outputs=figure_outputs, write_figures=write_figures)
     principal_point_given = [f"--{k.replace('_', '-')}" for k in ("cx_px", "cy_px") if getattr(args, k) is not None]
     rig = None
     if args.rig:
@@ -654,6 +659,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, principal point, baseline, axis, positions, disparity range and offset (docs/rig-format.md)")
+    p.add_argument(
+        "--cameras",
+        metavar="TOML",
+        help="calibrated cameras, one [[camera]] per view (intrinsics, lens distortion, pose): the views need not be rectified; "
+        "output is depth in the reference camera's own pixels (docs/rig-format.md, 'Calibrated cameras')",
+    )
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
 

@@ -722,6 +722,21 @@ def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
     )
 
 
+def _read_toml(path, kind: str) -> tuple[Path, dict]:
+    """``(path, parsed document)`` of a TOML file; errors name the ``kind`` of file ("rig", "cameras")."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"cannot read {kind} file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
+    try:
+        return path, tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise RigError(f"{kind} '{path}': not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise RigError(f"{kind} '{path}': not a UTF-8 text file") from None
+    except OSError as exc:  # e.g. no read permission
+        raise InputReadError(f"cannot read {kind} file '{path}': {exc.strerror or exc}") from None
+
+
 def load_rig(path) -> Rig:
     """Read and validate a rig TOML file.
 
@@ -732,17 +747,7 @@ def load_rig(path) -> Rig:
     RigError
         For invalid TOML or an invalid rig; the message starts with the file name.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"cannot read rig file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise RigError(f"rig '{path}': not valid TOML: {exc}") from None
-    except UnicodeDecodeError:
-        raise RigError(f"rig '{path}': not a UTF-8 text file") from None
-    except OSError as exc:  # e.g. no read permission
-        raise InputReadError(f"cannot read rig file '{path}': {exc.strerror or exc}") from None
+    path, data = _read_toml(path, "rig")
     try:
         return rig_from_dict(data, base_dir=path.parent, source=path)
     except RigError as exc:

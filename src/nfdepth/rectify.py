@@ -1,0 +1,537 @@
+"""Static stereo from a calibrated row of cameras that is not rectified.
+
+:func:`nfdepth.stereo.static_stereo` takes views of one camera orientation
+spaced along its X axis (paper section 2.3: static stereo is a camera
+translating along X). A real row of cameras is never built that exactly:
+each camera has its own intrinsics and lens distortion, turns a little
+against the others, and sits a little off the line through the rest.
+Given each camera's calibration, :func:`rectify_row` resamples every view
+to one common pinhole camera (no distortion) with one common orientation
+``R_rect`` whose X axis is the line through the camera centres (a least
+squares fit) and whose optical axis is the cameras' mean one made
+perpendicular to it (the way a stereo pair is rectified, Fusiello et al.
+2000, for any number of views). Each view's position along that line is its
+position for static stereo. :func:`calibrated_row_depth` runs static stereo
+on the rectified row and reads the depth back into the reference camera's
+own pixels (nearest pixel, so no depth is averaged across a step), converted
+from depth along the rectified optical axis to depth along the reference
+camera's.
+
+Conventions (as the poses CSV of ``docs/rig-format.md``): a camera's
+``rotation`` is camera-to-world (a camera-frame vector ``v`` is ``R v`` in
+the world), its ``position`` the optical centre in world coordinates, in
+scene units; camera axes X right, Y down, Z forward. OpenCV's extrinsics
+(``X_cam = R X_world + t``) convert with :meth:`CalibratedCamera.from_opencv`.
+Distortion coefficients are OpenCV's ``(k1, k2, p1, p2[, k3[, k4, k5, k6]])``.
+
+What the rectification cannot remove: a camera centre off the fitted line
+shifts its rectified view across the row by ``f e / Z`` px (``e`` its
+distance from the line), which depends on depth; :func:`rectify_row` warns
+when ``e`` exceeds :data:`MAX_OFF_LINE` of the smallest spacing of
+neighbouring views (then a disparity of ``d`` px per step comes with a
+vertical misalignment of up to ``MAX_OFF_LINE d``).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from ._derotation import derotate, grid_rays
+from ._validate import as_vector3
+
+__all__ = [
+    "MAX_OFF_LINE",
+    "MIN_SIDEWAYS_DEG",
+    "CalibratedCamera",
+    "CalibratedRowDepth",
+    "RectifiedRow",
+    "calibrated_row_depth",
+    "cameras_from_dict",
+    "load_cameras",
+    "rectify_row",
+]
+
+#: A camera centre further than this share of the smallest neighbour spacing off the fitted line warns.
+MAX_OFF_LINE = 0.01
+#: A row closer than this to the cameras' mean optical axis cannot be rectified into a row of views.
+MIN_SIDEWAYS_DEG = 30.0
+_DISTORTION_SIZES = (0, 4, 5, 8)
+
+
+def _as_matrix(name: str, value, shape) -> np.ndarray:
+    a = np.asarray(value, dtype=np.float64)
+    if a.shape != shape:
+        msg = f"{name} must have shape {shape}, got {a.shape}"
+        raise ValueError(msg)
+    if not np.all(np.isfinite(a)):
+        msg = f"{name} must be finite, got {a.tolist()}"
+        raise ValueError(msg)
+    return a
+
+
+@dataclass(frozen=True)
+class CalibratedCamera:
+    """One calibrated camera of a row.
+
+    Parameters
+    ----------
+    matrix : array_like, (3, 3)
+        Intrinsic matrix ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]`` in pixels
+        (``fx, fy > 0``; pixel centres at integers).
+    width_px, height_px : int
+        Image size.
+    position : array_like, (3,)
+        Optical centre in world coordinates, scene units.
+    rotation : array_like, (3, 3)
+        Camera-to-world rotation (a proper rotation matrix, to 1e-6).
+    distortion : array_like, optional
+        OpenCV's coefficients: 4, 5 or 8 of ``k1, k2, p1, p2, k3, k4, k5, k6``
+        (default none).
+    """
+
+    matrix: np.ndarray
+    width_px: int
+    height_px: int
+    position: np.ndarray
+    rotation: np.ndarray
+    distortion: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        k = _as_matrix("matrix", self.matrix, (3, 3))
+        if not (k[0, 0] > 0 and k[1, 1] > 0) or k[1, 0] != 0 or np.any(k[2] != (0.0, 0.0, 1.0)):
+            msg = f"matrix must be an intrinsic matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0 px, got {k.tolist()}"
+            raise ValueError(msg)
+        for name in ("width_px", "height_px"):
+            value = getattr(self, name)
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+                msg = f"{name} must be a positive integer, got {value!r}"
+                raise ValueError(msg)
+        r = _as_matrix("rotation", self.rotation, (3, 3))
+        if not np.allclose(r.T @ r, np.eye(3), atol=1e-6) or not np.linalg.det(r) > 0:
+            msg = f"rotation must be a rotation matrix (orthonormal, determinant +1), got {r.tolist()}"
+            raise ValueError(msg)
+        dist = np.asarray(self.distortion, dtype=np.float64).ravel()
+        if dist.size not in _DISTORTION_SIZES or not np.all(np.isfinite(dist)):
+            msg = f"distortion must be 4, 5 or 8 finite OpenCV coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) or none, got {dist.tolist()}"
+            raise ValueError(msg)
+        object.__setattr__(self, "matrix", k)
+        object.__setattr__(self, "rotation", r)
+        object.__setattr__(self, "position", as_vector3("position", self.position))
+        object.__setattr__(self, "distortion", dist)
+
+    @classmethod
+    def from_opencv(cls, matrix, distortion, rvec_or_rotation, tvec, size) -> CalibratedCamera:
+        """From OpenCV's calibration: ``X_cam = R X_world + t`` (``R`` as a 3 x 3 matrix or a Rodrigues vector), ``size = (width, height)``."""
+        r = np.asarray(rvec_or_rotation, dtype=np.float64)
+        r = cv2.Rodrigues(r.reshape(3, 1))[0] if r.size == 3 else _as_matrix("rotation", r, (3, 3))
+        t = as_vector3("tvec", np.asarray(tvec, dtype=np.float64).ravel())
+        w, h = size
+        return cls(matrix=matrix, width_px=w, height_px=h, position=-r.T @ t, rotation=r.T, distortion=np.asarray(distortion, dtype=np.float64).ravel())
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image shape ``(rows, cols)``."""
+        return (int(self.height_px), int(self.width_px))
+
+    def rays(self) -> np.ndarray:
+        """Every pixel's ray ``(x, y, 1)`` in camera axes, lens distortion undone: ``(H, W, 2)`` of ``(x, y)``.
+
+        NaN where undoing the distortion does not converge (the pixel's ray,
+        distorted again, lands more than 0.01 px away: beyond the range where
+        the distortion model can be inverted, e.g. the far corners of a
+        strong barrel distortion).
+        """
+        h, w = self.shape
+        rows, cols = np.mgrid[0:h, 0:w].astype(np.float64)
+        pts = np.stack([cols.ravel(), rows.ravel()], axis=-1)[:, None, :]
+        if not self.distortion.size:
+            return cv2.undistortPoints(pts, self.matrix, self.distortion).reshape(h, w, 2)
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)  # to convergence (OpenCV's default stops after 5 iterations)
+        if hasattr(cv2, "undistortPointsIter"):  # OpenCV 4
+            xy = cv2.undistortPointsIter(pts, self.matrix, self.distortion, None, None, criteria)
+        else:
+            xy = cv2.undistortPoints(pts, self.matrix, self.distortion, criteria=criteria)
+        xy = xy.reshape(-1, 2)
+        back = cv2.projectPoints(np.concatenate([xy, np.ones((xy.shape[0], 1))], axis=1), np.zeros(3), np.zeros(3), self.matrix, self.distortion)[0]
+        lost = ~(np.abs(back.reshape(-1, 2) - pts.reshape(-1, 2)).max(axis=1) <= 0.01)
+        xy[lost] = np.nan
+        return xy.reshape(h, w, 2)
+
+
+@dataclass(frozen=True)
+class RectifiedRow:
+    """A row of views resampled to one camera and orientation (:func:`rectify_row`).
+
+    ``views``: the rectified views (float32, the reference's size), in their
+    order along the row (increasing ``positions``); ``positions``: each
+    view's position along the row's X axis relative to the reference, scene
+    units; ``reference``: the reference's index among them; ``order``: the
+    given index of each; ``inside``: where each view sees its own image;
+    ``focal_px``, ``cx_px``, ``cy_px``: the common camera; ``rotation``:
+    ``R_rect`` (rectified-to-world); ``off_line``: each camera centre's
+    distance from the fitted line, scene units; ``camera``: the reference
+    camera as given.
+    """
+
+    views: list
+    positions: np.ndarray
+    reference: int
+    order: list
+    inside: list
+    focal_px: float
+    cx_px: float
+    cy_px: float
+    rotation: np.ndarray
+    off_line: np.ndarray
+    camera: CalibratedCamera
+
+    def to_reference(self, depth, *, std=None):
+        """Depth along the rectified optical axis (the rectified reference's pixels) -> depth along the reference camera's, in its own pixels.
+
+        Nearest pixel (no depth averaged across a step); NaN where the
+        reference's pixel falls outside the rectified canvas. ``std``, the
+        depth's standard deviation, is scaled alike. Returns ``depth`` or
+        ``(depth, std)``.
+        """
+        rays = self.camera.rays()
+        turned = grid_rays_from(self.rotation.T @ self.camera.rotation, rays)
+        h, w = np.asarray(depth).shape
+        with np.errstate(divide="ignore", invalid="ignore"):
+            col = np.rint(self.cx_px + self.focal_px * turned[0] / turned[2])
+            row = np.rint(self.cy_px + self.focal_px * turned[1] / turned[2])
+        ok = (turned[2] > 0) & (col >= 0) & (col <= w - 1) & (row >= 0) & (row <= h - 1)
+        r = np.where(ok, row, 0).astype(np.intp)
+        c = np.where(ok, col, 0).astype(np.intp)
+        # the point at depth Z_rect on the reference pixel's ray (x, y, 1): its rectified z is turned[2] per unit of the ray
+        scale = np.where(ok, 1.0 / np.where(ok, turned[2], 1.0), np.nan)
+        out = np.asarray(depth, dtype=np.float64)[r, c] * scale
+        if std is None:
+            return out.astype(np.float32)
+        return out.astype(np.float32), (np.asarray(std, dtype=np.float64)[r, c] * scale).astype(np.float32)
+
+
+def grid_rays_from(rotation, rays) -> list[np.ndarray]:
+    """``rotation @ (x, y, 1)`` for an ``(H, W, 2)`` field of ``(x, y)``: three ``(H, W)`` arrays."""
+    r = np.asarray(rotation, dtype=np.float64)
+    x, y = rays[..., 0], rays[..., 1]
+    return [r[i, 0] * x + r[i, 1] * y + r[i, 2] for i in range(3)]
+
+
+def _row_axis(centres: np.ndarray, reference_x: np.ndarray) -> np.ndarray:
+    """The direction of the least-squares line through ``centres``, pointing along ``reference_x``."""
+    dev = centres - centres.mean(axis=0)
+    axis = np.linalg.svd(dev)[2][0]
+    return axis if axis @ reference_x >= 0 else -axis
+
+
+def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
+    """Resample a calibrated row of views to one camera and orientation, spaced along its X axis.
+
+    Parameters
+    ----------
+    views : sequence of 2-D arrays
+        Grey images, each of its camera's size.
+    cameras : sequence of CalibratedCamera
+        One per view, in the same order.
+    reference : int
+        The view whose camera sets the common focal length (its ``fx``),
+        image size and the part of the scene kept; the depth is read back
+        into its pixels.
+
+    Returns
+    -------
+    RectifiedRow
+        Views sorted along the row (the first at the most negative position
+        along the reference camera's X axis).
+
+    Raises
+    ------
+    ValueError
+        A count, size or index that does not fit; two camera centres at the
+        same place; a row within :data:`MIN_SIDEWAYS_DEG` of the cameras'
+        mean optical axis (moving toward the scene: no row of views).
+
+    Warns
+    -----
+    UserWarning
+        A camera centre off the fitted line by more than :data:`MAX_OFF_LINE`
+        of the smallest neighbour spacing.
+    """
+    cameras = list(cameras)
+    views = list(views)
+    n = len(views)
+    if n < 2 or len(cameras) != n:
+        msg = f"rectify_row needs at least 2 views and one camera per view, got {n} views and {len(cameras)} cameras"
+        raise ValueError(msg)
+    if isinstance(reference, (bool, np.bool_)) or not isinstance(reference, (int, np.integer)) or not 0 <= reference < n:
+        msg = f"reference must be an integer index of the views, 0..{n - 1}, got {reference!r}"
+        raise ValueError(msg)
+    for k, (v, cam) in enumerate(zip(views, cameras)):
+        if not isinstance(cam, CalibratedCamera):
+            msg = f"cameras[{k}] must be a CalibratedCamera, got {type(cam).__name__}"
+            raise TypeError(msg)
+        shape = np.shape(v)
+        if shape != cam.shape:
+            msg = f"views[{k}] is {shape[1] if len(shape) > 1 else '?'}x{shape[0] if shape else '?'} px (shape {shape}), its camera {cam.width_px}x{cam.height_px}: expected a grey image of its camera's size"
+            raise ValueError(msg)
+    centres = np.stack([c.position for c in cameras])
+    ref_cam = cameras[reference]
+    spacings = [np.linalg.norm(centres[i] - centres[j]) for i in range(n) for j in range(i + 1, n)]
+    if min(spacings) <= 1e-12 * max(max(spacings), 1e-300):
+        msg = "two cameras of the row are at the same place: static stereo needs every view at its own position along the row"
+        raise ValueError(msg)
+    x_axis = _row_axis(centres, ref_cam.rotation[:, 0])
+    forward = np.mean([c.rotation[:, 2] for c in cameras], axis=0)
+    forward = forward / np.linalg.norm(forward)
+    sideways = math.degrees(math.acos(min(1.0, abs(float(x_axis @ forward)))))
+    if sideways < MIN_SIDEWAYS_DEG:
+        msg = (
+            f"the row of camera centres runs {sideways:.1f} degrees from the cameras' mean optical axis: expected at least "
+            f"{MIN_SIDEWAYS_DEG:g} (a row across the view; cameras one behind the other give no row of views)"
+        )
+        raise ValueError(msg)
+    z_axis = forward - (forward @ x_axis) * x_axis
+    z_axis /= np.linalg.norm(z_axis)
+    y_axis = np.cross(z_axis, x_axis)
+    rect = np.stack([x_axis, y_axis, z_axis], axis=1)  # rectified-to-world
+    positions = (centres - centres[reference]) @ x_axis
+    across = centres - centres.mean(axis=0)
+    off_line = np.linalg.norm(across - np.outer(across @ x_axis, x_axis), axis=1)
+    order = [int(k) for k in np.argsort(positions, kind="stable")]
+    steps = np.diff(positions[order])
+    if np.any(steps <= 1e-12 * np.ptp(positions)):
+        msg = "two cameras of the row are at the same position along it: static stereo needs every view at its own position"
+        raise ValueError(msg)
+    if np.max(off_line) > MAX_OFF_LINE * np.min(steps):
+        worst = int(np.argmax(off_line))
+        warnings.warn(
+            f"camera {worst} is {off_line[worst]:.3g} scene units off the line through the row, {off_line[worst] / np.min(steps):.1%} of the "
+            f"smallest spacing of neighbouring views (at most {MAX_OFF_LINE:.0%} expected): its rectified view is misaligned across the row by "
+            "that share of the disparity, which static stereo does not model",
+            UserWarning,
+            stacklevel=2,
+        )
+    # the common camera: the reference's focal length and size, the principal point where the reference's own lands
+    f = float(ref_cam.matrix[0, 0])
+    h, w = ref_cam.shape
+    centre_ray = rect.T @ ref_cam.rotation @ np.linalg.solve(ref_cam.matrix, [ref_cam.matrix[0, 2], ref_cam.matrix[1, 2], 1.0])
+    cx = float(ref_cam.matrix[0, 2] - f * centre_ray[0] / centre_ray[2])
+    cy = float(ref_cam.matrix[1, 2] - f * centre_ray[1] / centre_ray[2])
+    new_matrix = np.array([[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]])
+    rect_views, inside = [], []
+    for k in order:
+        cam = cameras[k]
+        if not np.any(cam.distortion) and np.array_equal(cam.matrix, new_matrix) and np.allclose(cam.rotation, rect, rtol=0.0, atol=1e-12):
+            rect_views.append(np.array(views[k], dtype=np.float32))  # rectified as taken: no resampling
+            inside.append(np.ones((h, w), bool))
+            continue
+        # OpenCV's R turns the camera's axes into the rectified ones: R_rect^T R_k
+        map_x, map_y = cv2.initUndistortRectifyMap(cam.matrix, cam.distortion, rect.T @ cam.rotation, new_matrix, (w, h), cv2.CV_32FC1)
+        ch, cw = cam.shape
+        ahead = _ahead(cam, rect, new_matrix, (h, w))
+        tol = 1e-3  # px: float32 maps of a pixel on the border
+        seen = ahead & (map_x >= -tol) & (map_x <= cw - 1 + tol) & (map_y >= -tol) & (map_y <= ch - 1 + tol)
+        rect_views.append(derotate(np.asarray(views[k], np.float32), (np.clip(map_x, -1, cw), np.clip(map_y, -1, ch), seen)))
+        inside.append(seen)
+    return RectifiedRow(
+        views=rect_views,
+        positions=positions[order],
+        reference=order.index(reference),
+        order=order,
+        inside=inside,
+        focal_px=f,
+        cx_px=cx,
+        cy_px=cy,
+        rotation=rect,
+        off_line=off_line,
+        camera=ref_cam,
+    )
+
+
+def _ahead(cam: CalibratedCamera, rect, new_matrix, shape) -> np.ndarray:
+    """Where the rectified canvas's rays lie in front of ``cam`` (OpenCV's maps do not say)."""
+    h, w = shape
+    x = (np.arange(w, dtype=np.float64) - new_matrix[0, 2]) / new_matrix[0, 0]
+    y = (np.arange(h, dtype=np.float64) - new_matrix[1, 2]) / new_matrix[1, 1]
+    return grid_rays(cam.rotation.T @ rect, x, y)[2] > 0
+
+
+@dataclass(frozen=True)
+class CalibratedRowDepth:
+    """Depth of a calibrated row (:func:`calibrated_row_depth`).
+
+    ``depth``, ``depth_std``: along the reference camera's optical axis, in
+    its own pixels, scene units, NaN where unknown; ``edge_mask``: the
+    rectified reference's edge points read back the same way; ``row``: the
+    :class:`RectifiedRow`; ``result``: static stereo's
+    :class:`nfdepth.stereo.StereoResult` on it (disparity per scene unit of
+    position, in the rectified reference's pixels).
+    """
+
+    depth: np.ndarray
+    depth_std: np.ndarray
+    edge_mask: np.ndarray
+    row: RectifiedRow
+    result: object
+
+    def points(self, *, image=None):
+        """The depth as 3-D points in the reference camera's axes (lens distortion undone), as :func:`nfdepth.io.depth_to_points`.
+
+        Returns ``(points, colors)``: float32 ``(N, 3)`` in row-major pixel
+        order, and uint8 RGB ``(N, 3)`` from ``image`` (grey or RGB of the
+        reference's size; float values rounded and clipped to 0..255) or None.
+        """
+        from .io import depth_to_points
+
+        xy = self.row.camera.rays()
+        keep = np.isfinite(self.depth) & (self.depth > 0) & np.isfinite(xy).all(axis=-1)
+        _, colors = depth_to_points(np.where(keep, 1.0, np.nan), focal_px=1.0, image=image)
+        z = self.depth[keep].astype(np.float64)
+        pts = np.stack([xy[..., 0][keep] * z, xy[..., 1][keep] * z, z], axis=1).astype(np.float32)
+        return pts, colors
+
+
+def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) -> CalibratedRowDepth:
+    """Depth in the reference camera's pixels from a calibrated, unrectified row of views.
+
+    :func:`rectify_row`, then :func:`nfdepth.stereo.static_stereo` on the
+    rectified row with its positions (scene units: the disparity is px per
+    scene unit, depth ``focal_px / d``), then the depth read back
+    (:meth:`RectifiedRow.to_reference`). Pixels where the rectified reference
+    does not see its own image are NaN, and so are those whose match lies
+    outside every other view. ``stereo_options`` go to static stereo (not
+    ``positions``, ``axis`` or ``reference``).
+    """
+    from .stereo import static_stereo
+
+    clash = sorted(set(stereo_options) & {"positions", "axis"})
+    if clash:
+        msg = f"calibrated_row_depth sets {', '.join(clash)} from the cameras: do not pass {' or '.join(clash)}"
+        raise TypeError(msg)
+    row = rectify_row(views, cameras, reference=reference)
+    res = static_stereo(row.views, reference=row.reference, positions=row.positions, **stereo_options)
+    d = np.asarray(res.disparity, dtype=np.float64)
+    h, w = d.shape
+    cols = np.arange(w, dtype=np.float64)[None, :]
+    rows = np.arange(h)[:, None]
+    seen_elsewhere = np.zeros((h, w), bool)
+    for k, (t, inside) in enumerate(zip(row.positions, row.inside)):
+        if k == row.reference:
+            continue
+        with np.errstate(invalid="ignore"):
+            c = np.rint(cols - t * d)
+        ok = np.isfinite(c) & (c >= 0) & (c <= w - 1)
+        seen_elsewhere |= ok & inside[np.broadcast_to(rows, (h, w)), np.where(ok, c, 0).astype(np.intp)]
+    usable = np.isfinite(d) & (d > 0) & row.inside[row.reference] & seen_elsewhere
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(usable, row.focal_px / d, np.nan)
+        z_std = np.where(usable, row.focal_px * np.asarray(res.uncertainty, dtype=np.float64) / d**2, np.nan)
+    depth, depth_std = row.to_reference(z, std=z_std)
+    edges = row.to_reference(np.where(res.edge_mask & usable, 1.0, np.nan))
+    return CalibratedRowDepth(depth=depth, depth_std=depth_std, edge_mask=np.isfinite(edges) & np.isfinite(depth), row=row, result=res)
+
+
+# ----------------------------------------------------------------- files
+
+_CAMERA_KEYS = ("width_px", "height_px", "focal_px", "fx_px", "fy_px", "cx_px", "cy_px", "distortion", "position", "rotation_deg", "rvec", "tvec")
+
+
+def _parse_camera(table, key: str) -> CalibratedCamera:
+    from .rig import (
+        RigError,
+        _check_keys,
+        _exclusive,
+        _fail,
+        _integer,
+        _is_number,
+        _number,
+        _vector,
+    )
+
+    t = _check_keys(table, key, _CAMERA_KEYS)
+    width = _integer(t, key, "width_px")
+    height = _integer(t, key, "height_px")
+    if _exclusive(t, key, ("focal_px", "fx_px"), required=True) == "focal_px":
+        if "fy_px" in t:
+            raise RigError(f"{key}: focal_px and fy_px contradict each other: give focal_px, or fx_px and fy_px")
+        fx = fy = _number(t, key, "focal_px", positive=True)
+    else:
+        fx = _number(t, key, "fx_px", positive=True)
+        fy = _number(t, key, "fy_px", positive=True)
+    cx = _number(t, key, "cx_px", required=False, default=(width - 1) / 2.0)
+    cy = _number(t, key, "cy_px", required=False, default=(height - 1) / 2.0)
+    dist = t.get("distortion", [])
+    if not isinstance(dist, list) or len(dist) not in _DISTORTION_SIZES or not all(_is_number(v) and math.isfinite(v) for v in dist):
+        raise _fail(f"{key}.distortion", dist, "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]")
+    matrix = [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]
+    if "rvec" in t or "tvec" in t:
+        for name in ("position", "rotation_deg"):
+            if name in t:
+                raise RigError(f"{key}: {name} and rvec/tvec contradict each other: give position and rotation_deg, or OpenCV's rvec and tvec")
+        rvec = _vector(t, key, "rvec", required=True)
+        tvec = _vector(t, key, "tvec", required=True)
+        return CalibratedCamera.from_opencv(matrix, dist, rvec, tvec, (width, height))
+    position = _vector(t, key, "position", required=True)
+    rot = _vector(t, key, "rotation_deg", default=np.zeros(3))
+    if not np.linalg.norm(rot) <= 1e6:
+        raise _fail(f"{key}.rotation_deg", t["rotation_deg"], "a rotation vector of at most 1e6 degrees (give it modulo 360)")
+    rotation = cv2.Rodrigues(np.radians(rot).reshape(3, 1))[0]
+    return CalibratedCamera(matrix=np.array(matrix), width_px=width, height_px=height, position=position, rotation=rotation, distortion=np.array(dist, float))
+
+
+def cameras_from_dict(data: dict) -> list:
+    """The cameras of a parsed cameras file (a dict with a ``camera`` array of tables), in order.
+
+    Each table: ``width_px``, ``height_px``; ``focal_px`` or ``fx_px`` and
+    ``fy_px``; ``cx_px``, ``cy_px`` (default the image centre);
+    ``distortion`` (OpenCV's coefficients, default none); the pose as
+    ``position`` (optical centre, world, scene units) and ``rotation_deg``
+    (camera-to-world rotation vector, degrees; default none), or as OpenCV's
+    ``rvec`` (radians) and ``tvec`` (``X_cam = R X_world + t``).
+
+    Raises
+    ------
+    nfdepth.rig.RigError
+        With the key path, the value and what was expected.
+    """
+    from .rig import RigError, _check_keys
+
+    if not isinstance(data, dict):
+        raise RigError(f"cameras: expected a table with a [[camera]] array, got {type(data).__name__}")
+    _check_keys(data, "cameras", ("camera",))
+    tables = data.get("camera")
+    if not isinstance(tables, list) or not tables:
+        raise RigError("camera is missing: expected one [[camera]] table per view, in the order of the views")
+    cameras = []
+    for k, table in enumerate(tables):
+        try:
+            cameras.append(_parse_camera(table, f"camera[{k}]"))
+        except ValueError as exc:
+            if isinstance(exc, RigError):
+                raise
+            raise RigError(f"camera[{k}]: {exc}") from None
+    return cameras
+
+
+def load_cameras(path) -> list:
+    """Read a cameras file (TOML, :func:`cameras_from_dict`; ``docs/rig-format.md``, "Calibrated cameras").
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    nfdepth.rig.RigError
+        For invalid TOML or an invalid camera; the message starts with the file name.
+    """
+    from .rig import RigError, _read_toml
+
+    path, data = _read_toml(path, "cameras")
+    try:
+        return cameras_from_dict(data)
+    except RigError as exc:
+        raise RigError(f"cameras '{path}': {exc}") from None
