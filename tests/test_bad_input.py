@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from cli_runner import run_cli
 
 import nfdepth as nf
 from nfdepth import _validate, fast, io, stereo, synthetic
@@ -623,12 +624,6 @@ def test_cli_stereo_threads_do_not_change_the_output(tmp_path, capfd):
         assert code == 0, err
         outs.append(out.read_bytes())
     assert outs[0] == outs[1]
-
-
-def run_cli(capfd, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return code, out, err
 
 
 def _cli_cases(tmp: Path, v):

@@ -6,15 +6,9 @@ import sys
 
 import numpy as np
 import pytest
+from cli_runner import run_cli
 
-from nfdepth.cli import main
 from nfdepth.experiments import run_paper_experiment
-
-
-def run_cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def is_png(path):

@@ -7,17 +7,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from cli_runner import run_cli
 
 from nfdepth.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 RIG = ROOT / "examples" / "paper_pyramid_rig.toml"
-
-
-def run_cli(capfd, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

@@ -7,10 +7,10 @@ import math
 import cv2
 import numpy as np
 import pytest
+from cli_runner import run_cli
 from scipy import ndimage
 
 from nfdepth import baselines
-from nfdepth.cli import main
 from nfdepth.datasets import DataNotFoundError, MultiViewScene, data_root, list_scenes
 from nfdepth.evaluate import (
     GAUSSIAN_MEDIAN_Z,
@@ -27,12 +27,6 @@ from nfdepth.evaluate import (
     select_views,
     to_jsonable,
 )
-
-
-def run_cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _cli_has_evaluate():

@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from cli_runner import run_cli
 
 try:
     import tomllib
@@ -18,7 +19,6 @@ except ImportError:  # Python 3.10
 import nfdepth.cli
 from nfdepth import synthetic
 from nfdepth.camera import RigidMotion
-from nfdepth.cli import main
 from nfdepth.rig import (
     Rig,
     RigError,
@@ -46,12 +46,6 @@ BASE = {
 @pytest.fixture(autouse=True)
 def plugin(monkeypatch):
     monkeypatch.setattr(nfdepth.cli, "_PLUGIN_COMMANDS", ("_cli_rig",))
-
-
-def run_cli(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 # ------------------------------------------------------------------ parsing

@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 import pytest
 import tomllib
+from cli_runner import run_cli
 
 from nfdepth import datasets
-from nfdepth.cli import main
 from nfdepth.io import depth_to_points, read_pfm
 
 FOCAL_PX, BASELINE = 100.0, 0.5
@@ -25,12 +25,6 @@ TRUE_PX, OFFSET_PX = 7.0, 4.0  # the images shift by 3 px per view step
 TRUE_DEPTH = FOCAL_PX * BASELINE / TRUE_PX  # 7.14 scene units
 SHAPE = (96, 128)
 CX, CY = 40.25, 70.5  # a principal point far from the centre (63.5, 47.5)
-
-
-def run_cli(capfd, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

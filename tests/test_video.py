@@ -8,6 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from cli_runner import run_cli
 
 import nfdepth.cli
 from nfdepth import synthetic
@@ -22,12 +23,6 @@ N_FRAMES = 9
 @pytest.fixture(autouse=True)
 def plugin(monkeypatch):
     monkeypatch.setattr(nfdepth.cli, "_PLUGIN_COMMANDS", ("_cli_rig",))
-
-
-def run_cli(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")
