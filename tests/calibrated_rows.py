@@ -82,3 +82,17 @@ def cameras_toml(cameras, *, opencv=False) -> str:
             lines += ["position = [" + ", ".join(repr(float(v)) for v in cam.position) + "]", "rotation_deg = [" + ", ".join(repr(float(v)) for v in rot) + "]"]
         lines.append("")
     return "\n".join(lines)
+
+
+def turned_view(image, cam, *, focal_px):
+    """What ``cam`` sees from the centre of a rectified view ``image`` taken with orientation I, focal length
+    ``focal_px`` and its principal point at the image centre: the rectified view read (cubic spline) where each of
+    the camera's pixels' rays (its turn and lens distortion undone) meets it; exact for any depth (a pure turn)."""
+    from scipy import ndimage
+
+    h, w = image.shape
+    xy = cam.rays()
+    ray = np.einsum("ij,hwj->hwi", cam.rotation, np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1))
+    col = (w - 1) / 2 + focal_px * ray[..., 0] / ray[..., 2]
+    row = (h - 1) / 2 + focal_px * ray[..., 1] / ray[..., 2]
+    return ndimage.map_coordinates(np.asarray(image, np.float32), [row, col], order=3, mode="nearest").astype(np.float32)

@@ -290,3 +290,47 @@ def test_the_example_cameras_file_is_the_tests_row():
         np.testing.assert_array_equal(got.distortion, want.distortion)
         np.testing.assert_allclose(got.position, want.position, atol=1e-15)
         np.testing.assert_allclose(got.rotation, want.rotation, atol=1e-12)
+
+
+@pytest.mark.data
+def test_real_views_turned_and_distorted_are_rectified_back():
+    """Middlebury Art, three views: the outer two as seen by cameras turned by up to 1 degree about each axis, with
+    principal points up to 5 px off and lens distortion (k1 up to 0.3), the reference as taken; the calibrated row
+    gives the truth's disparity ``f / Z`` (f = 1870 px, views 1 unit apart) about as well as the views as taken:
+    dense bad-1px 4.36 % at 92.0 % cover against 4.13 % at 96.8 %, edge points 5.66 % (12788) against 5.10 %
+    (15836); the turned views without rectification 100 %. Measured."""
+    from calibrated_rows import turned_view
+
+    from nfdepth import datasets
+    from nfdepth.evaluate import disparity_errors, select_views
+
+    f = 1870.0
+    try:
+        sc = datasets.load_scene("middlebury2005/Art", datasets.data_root())
+    except datasets.DataNotFoundError:
+        pytest.skip("real data not found: set NFDEPTH_DATA or put it at ../shared/data")
+    sub = datasets.view_subset(sc, select_views(len(sc.views), sc.reference_index, "three"))
+    h, w = sub.shape
+    rng = np.random.default_rng(0)
+    cams, views = [], []
+    for k, v in enumerate(sub.views):
+        if k == sub.reference_index:
+            cam = camera(f, (w - 1) / 2, (h - 1) / 2, (k - 1.0, 0.0, 0.0), shape=(h, w))
+        else:
+            off = rng.uniform(-5, 5, 2)
+            cam = camera(f, (w - 1) / 2 + off[0], (h - 1) / 2 + off[1], (k - 1.0, 0.0, 0.0), turn_deg=tuple(rng.uniform(-1, 1, 3)), distortion=(rng.uniform(-0.3, 0.3), 0.0, 0.0, 0.0), shape=(h, w))
+        cams.append(cam)
+        views.append(v if k == sub.reference_index else turned_view(v, cam, focal_px=f))
+    plain = static_stereo(sub.views, reference=sub.reference_index)
+    r = calibrated_row_depth(views, cams, reference=sub.reference_index)
+    with np.errstate(divide="ignore"):
+        d = f / r.depth
+    dense, dense0 = disparity_errors(d, sub.disparity), disparity_errors(plain.disparity, sub.disparity)
+    edges = disparity_errors(np.where(r.edge_mask, d, np.nan), sub.disparity)
+    edges0 = disparity_errors(np.where(plain.edge_mask, plain.disparity, np.nan), sub.disparity)
+    assert dense["density"] > 0.88 and dense["bad_1px"] < 1.15 * dense0["bad_1px"]
+    assert edges["points"] > 0.75 * edges0["points"] and edges["bad_1px"] < 1.2 * edges0["bad_1px"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        raw = static_stereo(views, reference=sub.reference_index)
+    assert disparity_errors(raw.disparity, sub.disparity)["bad_1px"] > 0.5
