@@ -334,3 +334,19 @@ def test_real_views_turned_and_distorted_are_rectified_back():
         warnings.simplefilter("ignore")
         raw = static_stereo(views, reference=sub.reference_index)
     assert disparity_errors(raw.disparity, sub.disparity)["bad_1px"] > 0.5
+
+
+def test_a_column_of_cameras():
+    """Centres along world Y (the cameras one above the other): the line is the rectified Y axis and static stereo
+    runs along columns; the plane's depth as well as a row's (measured: 0.27 % median, 97 % of the pixels)."""
+    cams = [
+        camera(400.0, 92.0, 58.0, (0.0, -0.1, 0.0), turn_deg=(0.8, -1.5, 0.6), distortion=(-0.08, 0.02, 0.0, 0.0)),
+        camera(410.0, 89.5, 60.5, (0.0, 0.0, 0.0), turn_deg=(-0.4, 0.7, -0.3)),
+        camera(395.0, 90.0, 59.0, (0.0, 0.1, 0.0), turn_deg=(0.3, 1.2, 0.9)),
+    ]
+    views, depths = render(cams)
+    r = calibrated_row_depth(views[::-1], cams[::-1], reference=1)
+    assert r.row.axis == "y" and r.row.order == [2, 1, 0]
+    np.testing.assert_allclose(r.row.positions, [-0.1, 0.0, 0.1], atol=1e-12)
+    cover, med, p90 = _scores(r.depth, depths[1])
+    assert cover > 0.9 and med < 0.005 and p90 < 0.015

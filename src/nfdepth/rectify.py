@@ -8,7 +8,8 @@ against the others, and sits a little off the line through the rest.
 Given each camera's calibration, :func:`rectify_row` resamples every view
 to one common pinhole camera (no distortion) with one common orientation
 ``R_rect`` whose X axis is the line through the camera centres (a least
-squares fit) and whose optical axis is the cameras' mean one made
+squares fit; its Y axis for a column, a line nearer the reference camera's
+Y axis) and whose optical axis is the cameras' mean one made
 perpendicular to it (the way a stereo pair is rectified, Fusiello et al.
 2000, for any number of views). Each view's position along that line is its
 position for static stereo. :func:`calibrated_row_depth` runs static stereo
@@ -168,8 +169,10 @@ class RectifiedRow:
     """A row of views resampled to one camera and orientation (:func:`rectify_row`).
 
     ``views``: the rectified views (float32, the reference's size), in their
-    order along the row (increasing ``positions``); ``positions``: each
-    view's position along the row's X axis relative to the reference, scene
+    order along the row (increasing ``positions``); ``axis``: ``"x"`` for a
+    row, ``"y"`` for a column (the centres' line nearer the reference
+    camera's Y axis: the line is then the rectified Y axis); ``positions``:
+    each view's position along the line relative to the reference, scene
     units; ``reference``: the reference's index among them; ``order``: the
     given index of each; ``inside``: where each view sees its own image;
     ``focal_px``, ``cx_px``, ``cy_px``: the common camera; ``rotation``:
@@ -189,6 +192,7 @@ class RectifiedRow:
     rotation: np.ndarray
     off_line: np.ndarray
     camera: CalibratedCamera
+    axis: str = "x"
 
     def to_reference(self, depth, *, std=None):
         """Depth along the rectified optical axis (the rectified reference's pixels) -> depth along the reference camera's, in its own pixels.
@@ -222,11 +226,13 @@ def grid_rays_from(rotation, rays) -> list[np.ndarray]:
     return [r[i, 0] * x + r[i, 1] * y + r[i, 2] for i in range(3)]
 
 
-def _row_axis(centres: np.ndarray, reference_x: np.ndarray) -> np.ndarray:
-    """The direction of the least-squares line through ``centres``, pointing along ``reference_x``."""
+def _row_line(centres: np.ndarray, reference_rotation: np.ndarray) -> tuple[np.ndarray, str]:
+    """The direction of the least-squares line through ``centres`` and the reference camera's axis nearest it ("x" or "y"), the direction pointing along that axis."""
     dev = centres - centres.mean(axis=0)
-    axis = np.linalg.svd(dev)[2][0]
-    return axis if axis @ reference_x >= 0 else -axis
+    line = np.linalg.svd(dev)[2][0]
+    along = reference_rotation[:, :2].T @ line  # components along the reference's X and Y
+    k = int(np.argmax(np.abs(along)))
+    return (line if along[k] >= 0 else -line), "xy"[k]
 
 
 def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
@@ -247,7 +253,8 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
     -------
     RectifiedRow
         Views sorted along the row (the first at the most negative position
-        along the reference camera's X axis).
+        along the reference camera's X axis; for a column, whose centres'
+        line runs nearer the reference's Y axis, along its Y axis).
 
     Raises
     ------
@@ -285,23 +292,24 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
     if min(spacings) <= 1e-12 * max(max(spacings), 1e-300):
         msg = "two cameras of the row are at the same place: static stereo needs every view at its own position along the row"
         raise ValueError(msg)
-    x_axis = _row_axis(centres, ref_cam.rotation[:, 0])
+    line, axis = _row_line(centres, ref_cam.rotation)
     forward = np.mean([c.rotation[:, 2] for c in cameras], axis=0)
     forward = forward / np.linalg.norm(forward)
-    sideways = math.degrees(math.acos(min(1.0, abs(float(x_axis @ forward)))))
+    sideways = math.degrees(math.acos(min(1.0, abs(float(line @ forward)))))
     if sideways < MIN_SIDEWAYS_DEG:
         msg = (
             f"the row of camera centres runs {sideways:.1f} degrees from the cameras' mean optical axis: expected at least "
             f"{MIN_SIDEWAYS_DEG:g} (a row across the view; cameras one behind the other give no row of views)"
         )
         raise ValueError(msg)
-    z_axis = forward - (forward @ x_axis) * x_axis
+    z_axis = forward - (forward @ line) * line
     z_axis /= np.linalg.norm(z_axis)
-    y_axis = np.cross(z_axis, x_axis)
+    # the line is the rectified X axis of a row, the Y axis of a column (a right-handed frame either way)
+    x_axis, y_axis = (line, np.cross(z_axis, line)) if axis == "x" else (np.cross(line, z_axis), line)
     rect = np.stack([x_axis, y_axis, z_axis], axis=1)  # rectified-to-world
-    positions = (centres - centres[reference]) @ x_axis
+    positions = (centres - centres[reference]) @ line
     across = centres - centres.mean(axis=0)
-    off_line = np.linalg.norm(across - np.outer(across @ x_axis, x_axis), axis=1)
+    off_line = np.linalg.norm(across - np.outer(across @ line, line), axis=1)
     order = [int(k) for k in np.argsort(positions, kind="stable")]
     steps = np.diff(positions[order])
     if np.any(steps <= 1e-12 * np.ptp(positions)):
@@ -350,6 +358,7 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         rotation=rect,
         off_line=off_line,
         camera=ref_cam,
+        axis=axis,
     )
 
 
@@ -414,19 +423,21 @@ def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) ->
         msg = f"calibrated_row_depth sets {', '.join(clash)} from the cameras: do not pass {' or '.join(clash)}"
         raise TypeError(msg)
     row = rectify_row(views, cameras, reference=reference)
-    res = static_stereo(row.views, reference=row.reference, positions=row.positions, **stereo_options)
+    res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
     d = np.asarray(res.disparity, dtype=np.float64)
     h, w = d.shape
-    cols = np.arange(w, dtype=np.float64)[None, :]
-    rows = np.arange(h)[:, None]
+    rows, cols = np.mgrid[0:h, 0:w]
     seen_elsewhere = np.zeros((h, w), bool)
     for k, (t, inside) in enumerate(zip(row.positions, row.inside)):
         if k == row.reference:
             continue
+        # where the point lies in view k: shifted by t d along the line, toward -col (-row for a column)
+        along, size = (cols, w) if row.axis == "x" else (rows, h)
         with np.errstate(invalid="ignore"):
-            c = np.rint(cols - t * d)
-        ok = np.isfinite(c) & (c >= 0) & (c <= w - 1)
-        seen_elsewhere |= ok & inside[np.broadcast_to(rows, (h, w)), np.where(ok, c, 0).astype(np.intp)]
+            moved = np.rint(along - t * d)
+        ok = np.isfinite(moved) & (moved >= 0) & (moved <= size - 1)
+        moved = np.where(ok, moved, 0).astype(np.intp)
+        seen_elsewhere |= ok & (inside[rows, moved] if row.axis == "x" else inside[moved, cols])
     usable = np.isfinite(d) & (d > 0) & row.inside[row.reference] & seen_elsewhere
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(usable, row.focal_px / d, np.nan)
