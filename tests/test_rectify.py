@@ -285,6 +285,7 @@ def test_the_example_cameras_file_is_the_tests_row():
     from nfdepth.rectify import load_cameras
 
     cams = load_cameras(Path(__file__).resolve().parents[1] / "examples" / "calibrated_row_cameras.toml")
+    assert cams[0] == cams[0] and cams[0] != cams[1] and cams[0] != "camera"
     for got, want in zip(cams, default_row(), strict=True):
         np.testing.assert_array_equal(got.matrix, want.matrix)
         np.testing.assert_array_equal(got.distortion, want.distortion)

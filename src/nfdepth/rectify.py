@@ -75,7 +75,7 @@ def _as_matrix(name: str, value, shape) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CalibratedCamera:
     """One calibrated camera of a row.
 
@@ -125,6 +125,15 @@ class CalibratedCamera:
         object.__setattr__(self, "position", as_vector3("position", self.position))
         object.__setattr__(self, "distortion", dist)
 
+    def __eq__(self, other) -> bool:
+        if not isinstance(other, CalibratedCamera):
+            return NotImplemented
+        return (self.width_px, self.height_px) == (other.width_px, other.height_px) and all(
+            np.array_equal(getattr(self, k), getattr(other, k)) for k in ("matrix", "position", "rotation", "distortion")
+        )
+
+    __hash__ = None  # mutable-looking arrays: no hashing
+
     @classmethod
     def from_opencv(cls, matrix, distortion, rvec_or_rotation, tvec, size) -> CalibratedCamera:
         """From OpenCV's calibration: ``X_cam = R X_world + t`` (``R`` as a 3 x 3 matrix or a Rodrigues vector), ``size = (width, height)``."""
@@ -145,23 +154,31 @@ class CalibratedCamera:
         NaN where undoing the distortion does not converge (the pixel's ray,
         distorted again, lands more than 0.01 px away: beyond the range where
         the distortion model can be inverted, e.g. the far corners of a
-        strong barrel distortion).
+        strong barrel distortion). Computed once per camera (read-only).
         """
+        cached = self.__dict__.get("_rays")
+        if cached is not None:
+            return cached
         h, w = self.shape
         rows, cols = np.mgrid[0:h, 0:w].astype(np.float64)
         pts = np.stack([cols.ravel(), rows.ravel()], axis=-1)[:, None, :]
         if not self.distortion.size:
-            return cv2.undistortPoints(pts, self.matrix, self.distortion).reshape(h, w, 2)
-        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)  # to convergence (OpenCV's default stops after 5 iterations)
-        if hasattr(cv2, "undistortPointsIter"):  # OpenCV 4
-            xy = cv2.undistortPointsIter(pts, self.matrix, self.distortion, None, None, criteria)
+            xy = cv2.undistortPoints(pts, self.matrix, self.distortion).reshape(h, w, 2)
         else:
-            xy = cv2.undistortPoints(pts, self.matrix, self.distortion, criteria=criteria)
-        xy = xy.reshape(-1, 2)
-        back = cv2.projectPoints(np.concatenate([xy, np.ones((xy.shape[0], 1))], axis=1), np.zeros(3), np.zeros(3), self.matrix, self.distortion)[0]
-        lost = ~(np.abs(back.reshape(-1, 2) - pts.reshape(-1, 2)).max(axis=1) <= 0.01)
-        xy[lost] = np.nan
-        return xy.reshape(h, w, 2)
+            # to 1e-10 (OpenCV's default stops after 5 iterations; 20 reach it for common lenses, the check below catches the rest)
+            criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 1e-10)
+            if hasattr(cv2, "undistortPointsIter"):  # OpenCV 4
+                xy = cv2.undistortPointsIter(pts, self.matrix, self.distortion, None, None, criteria)
+            else:
+                xy = cv2.undistortPoints(pts, self.matrix, self.distortion, criteria=criteria)
+            xy = xy.reshape(-1, 2)
+            back = cv2.projectPoints(np.concatenate([xy, np.ones((xy.shape[0], 1))], axis=1), np.zeros(3), np.zeros(3), self.matrix, self.distortion)[0]
+            lost = ~(np.abs(back.reshape(-1, 2) - pts.reshape(-1, 2)).max(axis=1) <= 0.01)
+            xy[lost] = np.nan
+            xy = xy.reshape(h, w, 2)
+        xy.setflags(write=False)
+        object.__setattr__(self, "_rays", xy)  # a camera is immutable: computed once
+        return xy
 
 
 @dataclass(frozen=True)
