@@ -351,3 +351,31 @@ def test_a_column_of_cameras():
     np.testing.assert_allclose(r.row.positions, [-0.1, 0.0, 0.1], atol=1e-12)
     cover, med, p90 = _scores(r.depth, depths[1])
     assert cover > 0.9 and med < 0.005 and p90 < 0.015
+
+
+def test_cameras_to_toml_round_trips():
+    from nfdepth.rectify import cameras_from_dict, cameras_to_toml
+    from nfdepth.rig import tomllib
+
+    cams = default_row()
+    back = cameras_from_dict(tomllib.loads(cameras_to_toml(cams)))
+    for got, want in zip(back, cams, strict=True):
+        np.testing.assert_array_equal(got.matrix, want.matrix)
+        np.testing.assert_array_equal(got.distortion, want.distortion)
+        np.testing.assert_array_equal(got.position, want.position)
+        np.testing.assert_allclose(got.rotation, want.rotation, rtol=0, atol=1e-13)
+    skewed = CalibratedCamera(matrix=[[400.0, 1.0, 90.0], [0.0, 400.0, 60.0], [0.0, 0.0, 1.0]], width_px=180, height_px=120, position=np.zeros(3), rotation=np.eye(3))
+    with pytest.raises(ValueError, match=r"cameras\[0\] has a skewed pixel grid \(matrix\[0, 1\] = 1\)"):
+        cameras_to_toml([skewed])
+
+
+def test_the_example_cameras_scale_with_the_image():
+    from nfdepth.synthetic import calibrated_plane_row, example_calibrated_cameras
+
+    big = example_calibrated_cameras(image_size_px=(360, 240))
+    assert big[1].matrix[0, 0] == 820.0 and big[1].matrix[0, 2] == 179.5 and big[1].shape == (240, 360)
+    scene = calibrated_plane_row(big, noise_std=0.0)
+    r = calibrated_row_depth(scene.views, scene.cameras, reference=1)
+    assert _scores(r.depth, scene.depths[1])[1] < 0.005
+    with pytest.raises(ValueError, match="reference_index must index one of the 3 cameras, got 3"):
+        calibrated_plane_row(reference_index=3)

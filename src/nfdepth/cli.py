@@ -228,7 +228,8 @@ def _cmd_demo(args) -> int:
     from .experiments import run_paper_experiment
     from .io import atomic_write, depth_to_points, write_array, write_ply
     from .stereo import static_stereo
-    from .synthetic import paper_pyramid, static_sequence
+    from .rectify import cameras_to_toml
+    from .synthetic import calibrated_plane_row, paper_pyramid, static_sequence
 
     out = _check_out_dir(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -270,6 +271,11 @@ def _cmd_demo(args) -> int:
     rail = static_sequence(paper_pyramid(), scene.camera, n_views=8, camera_step=(1.0, 0.0, 0.0))
     for k, frame in enumerate(rail.frames):
         write_png16(example / "rail" / f"frame_{k:03d}.png", frame)
+    # A calibrated row of three cameras that is not rectified (`nfdepth stereo ... --cameras`).
+    calibrated = calibrated_plane_row()
+    for k, frame in enumerate(calibrated.views):
+        write_png16(example / f"calibrated_view{k}.png", frame)
+    atomic_write(example / "calibrated_cameras.toml", lambda fh: fh.write(cameras_to_toml(calibrated.cameras).encode()), force=True)
     views = [np.asarray(f, dtype=np.float32) for f in scene.frames]
     stereo = static_stereo(views, reference=scene.reference_index, edges_only=True)
     depth = stereo.depth(focal_px=scene.camera.focal_px, baseline=2.0)

@@ -53,6 +53,7 @@ __all__ = [
     "RectifiedRow",
     "calibrated_row_depth",
     "cameras_from_dict",
+    "cameras_to_toml",
     "load_cameras",
     "rectify_row",
 ]
@@ -563,3 +564,41 @@ def load_cameras(path) -> list:
         return cameras_from_dict(data)
     except RigError as exc:
         raise RigError(f"cameras '{path}': {exc}") from None
+
+
+def cameras_to_toml(cameras) -> str:
+    """A cameras file for :func:`load_cameras` (``nfdepth stereo --cameras``): one ``[[camera]]`` per camera, in order.
+
+    Intrinsics as ``fx_px``, ``fy_px``, ``cx_px``, ``cy_px``, the pose as
+    ``position`` and ``rotation_deg``; numbers written to round-trip
+    (the rotation through its rotation vector, to about 1e-14). From
+    OpenCV's calibration: ``cameras_to_toml([CalibratedCamera.from_opencv(K,
+    dist, rvec, tvec, (w, h)), ...])``.
+
+    Raises
+    ------
+    ValueError
+        A camera with a skewed pixel grid (``matrix[0, 1] != 0``), which the
+        file cannot hold.
+    """
+
+    def numbers(values) -> str:
+        return "[" + ", ".join(repr(float(v) + 0.0) for v in np.ravel(values)) + "]"
+
+    lines = []
+    for k, cam in enumerate(cameras):
+        if not isinstance(cam, CalibratedCamera):
+            msg = f"cameras[{k}] must be a CalibratedCamera, got {type(cam).__name__}"
+            raise TypeError(msg)
+        m = cam.matrix
+        if m[0, 1] != 0:
+            msg = f"cameras[{k}] has a skewed pixel grid (matrix[0, 1] = {m[0, 1]:g}), which a cameras file cannot hold: expected 0"
+            raise ValueError(msg)
+        lines += ["[[camera]]", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
+        lines += [f"{key} = {float(v)!r}" for key, v in (("fx_px", m[0, 0]), ("fy_px", m[1, 1]), ("cx_px", m[0, 2]), ("cy_px", m[1, 2]))]
+        if cam.distortion.size:
+            lines.append(f"distortion = {numbers(cam.distortion)}")
+        lines.append(f"position = {numbers(cam.position)}")
+        lines.append(f"rotation_deg = {numbers(np.degrees(cv2.Rodrigues(cam.rotation)[0]))}")
+        lines.append("")
+    return "\n".join(lines)

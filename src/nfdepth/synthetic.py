@@ -1,5 +1,10 @@
 """Exactly anti-aliased synthetic scenes: the paper's pyramid (section 3.2, 3.3.1).
 
+(At the end of the module, a scene of another kind: a textured plane seen by
+a calibrated row of cameras that is not rectified, :func:`calibrated_plane_row`,
+for :mod:`nfdepth.rectify`; its texture is evaluated exactly at each pixel's
+ray, not area-averaged.)
+
 A scene is a convex polyhedron with one constant intensity per face, seen by
 a pinhole camera (``nfdepth.camera.PinholeCamera``) over a constant
 background. Both the object and the camera move rigidly over time.
@@ -42,6 +47,7 @@ __all__ = [
     "PAPER_FOCAL_PX",
     "PAPER_MOVING_CAMERA_VELOCITY",
     "PYRAMID_FACE_INTENSITIES",
+    "CalibratedRowScene",
     "CameraMotion",
     "ConvexPolyhedron",
     "DynamicScene",
@@ -50,7 +56,9 @@ __all__ = [
     "Rendering",
     "StaticScene",
     "VideoScene",
+    "calibrated_plane_row",
     "dynamic_sequence",
+    "example_calibrated_cameras",
     "paper_camera",
     "paper_dynamic_sequence",
     "paper_pyramid",
@@ -1138,3 +1146,82 @@ def paper_static_sequence(*, n_views=3, baseline=2.0, noise_std=0.0, rng=None, i
         rng=rng,
         dtype=dtype,
     )
+
+
+# ---------------------------------------------------------------------------
+# A calibrated row of cameras that is not rectified (nfdepth.rectify)
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CalibratedRowScene:
+    """Views of a textured plane by calibrated cameras (:func:`calibrated_plane_row`).
+
+    ``views`` (float32), ``depths`` (float64: each camera's true depth along
+    its own optical axis at each of its pixels), ``cameras``
+    (:class:`nfdepth.rectify.CalibratedCamera`), ``reference_index``.
+    """
+
+    views: list
+    depths: list
+    cameras: list
+    reference_index: int
+
+
+def example_calibrated_cameras(*, image_size_px=(180, 120)) -> list:
+    """Three cameras 0.1 scene units apart along world X, not rectified: focal lengths of 395-411 px, their own
+    principal points, turns of 0.5-1.7 degrees, lens distortion on two (``examples/calibrated_row_cameras.toml``)."""
+    from .rectify import CalibratedCamera
+
+    w, h = (int(v) for v in image_size_px)
+    check_frame_size("image_size_px", (h, w))
+    sx, sy = w / 180.0, h / 120.0  # the intrinsics scale with the image
+    spec = [  # fx, fy, cx, cy at 180 x 120 px; x; turn (deg); distortion
+        (400.0, 400.0, 92.0, 58.0, -0.1, (0.8, -1.5, 0.6), (-0.08, 0.02, 0.0, 0.0)),
+        (410.0, 411.0, 89.5, 60.5, 0.0, (-0.4, 0.7, -0.3), (0.05, 0.0, 0.001, -0.001, 0.0)),
+        (395.0, 395.0, 90.0, 59.0, 0.1, (0.3, 1.2, 0.9), ()),
+    ]
+    cams = []
+    for fx, fy, cx, cy, x, turn, dist in spec:
+        k = np.array([[fx * sx, 0.0, (cx + 0.5) * sx - 0.5], [0.0, fy * sy, (cy + 0.5) * sy - 0.5], [0.0, 0.0, 1.0]])
+        rotation = Rotation.from_rotvec(np.radians(turn)).as_matrix()
+        cams.append(CalibratedCamera(matrix=k, width_px=w, height_px=h, position=np.array([x, 0.0, 0.0]), rotation=rotation, distortion=np.array(dist)))
+    return cams
+
+
+def calibrated_plane_row(cameras=None, *, depth=6.0, slope=0.15, noise_std=1.0, seed=4, reference_index=1) -> CalibratedRowScene:
+    """A slanted plane ``Z = depth + slope X`` (world axes) with a sum-of-sinusoids texture in world ``X, Y``.
+
+    Each camera's pixel ray (its lens distortion undone) meets the plane at a
+    point whose texture is evaluated exactly: no resampling enters the
+    images or the true depths. Wavelengths 0.11-0.45 scene units (7-30 px
+    for the default cameras at the default depth). ``cameras`` default
+    :func:`example_calibrated_cameras`.
+    """
+    cams = example_calibrated_cameras() if cameras is None else list(cameras)
+    z0 = check_positive_finite("depth", depth)
+    slope = check_finite("slope", slope)
+    noise = check_nonnegative_finite("noise_std", noise_std)
+    reference_index = check_int("reference_index", reference_index, 0)
+    if reference_index >= len(cams):
+        msg = f"reference_index must index one of the {len(cams)} cameras, got {reference_index}"
+        raise ValueError(msg)
+    rng = np.random.default_rng(seed)
+    n = 40
+    wavelength = rng.uniform(0.11, 0.45, n)
+    angle = rng.uniform(0.0, np.pi, n)
+    ky, kx = 2 * np.pi * np.sin(angle) / wavelength, 2 * np.pi * np.cos(angle) / wavelength
+    phase = rng.uniform(0.0, 2 * np.pi, n)
+    noise_rng = np.random.default_rng(seed + 1)
+    views, depths = [], []
+    for cam in cams:
+        xy = cam.rays()
+        ray = np.einsum("ij,hwj->hwi", cam.rotation, np.concatenate([xy, np.ones((*xy.shape[:2], 1))], axis=-1))
+        c = cam.position
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (z0 + slope * c[0] - c[2]) / (ray[..., 2] - slope * ray[..., 0])
+        p = c + s[..., None] * ray
+        texture = 100.0 + 40.0 / np.sqrt(n / 2) * np.sin(ky * p[..., 1, None] + kx * p[..., 0, None] + phase).sum(-1)
+        views.append((texture + noise_rng.normal(0.0, noise, s.shape)).astype(np.float32))
+        depths.append(s)  # the ray's z in camera axes is 1: s is the depth along the optical axis
+    return CalibratedRowScene(views=views, depths=depths, cameras=cams, reference_index=reference_index)
