@@ -471,6 +471,9 @@ def _cmd_stereo(args) -> int:
         )
     if rig is not None:
         rig.check_image_shape(views[0].shape)
+        if any(rig.distortion):  # the row's views as the rig's pinhole camera sees them
+            views = [rig.undistort(v) for v in views]
+            column_views = [rig.undistort(v) for v in column_views]
     if args.ply:
         from .camera import PinholeCamera
 
@@ -537,6 +540,13 @@ def _cmd_stereo(args) -> int:
         k += 1
     if args.ply:
         cam_ref = read_image(args.views[reference], grey=False, dtype=None)
+        if rig is not None and any(rig.distortion):  # colours on the undistorted grid of the depth
+            planes = cam_ref.reshape(*cam_ref.shape[:2], -1)
+            info = np.iinfo(cam_ref.dtype) if cam_ref.dtype.kind in "iu" else None
+            planes = np.stack([rig.undistort(planes[..., c]) for c in range(planes.shape[-1])], axis=-1)
+            if info is not None:
+                planes = np.clip(np.rint(planes), info.min, info.max).astype(cam_ref.dtype)
+            cam_ref = planes.reshape(cam_ref.shape)
         pts, cols = depth_to_points(values, focal_px=focal, cx_px=args.cx_px, cy_px=args.cy_px, image=to_rgb8(cam_ref))  # 16-bit, float: scaled to 0..255
         write_ply(outputs[k], pts, colors=cols, force=args.force)
     valid = np.isfinite(values)
@@ -664,7 +674,7 @@ def build_parser() -> argparse.ArgumentParser:
         "at 640x480, same edge precision, coarser dense values (README: 'Faster, with coarser candidates')",
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
-    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, principal point, baseline, axis, positions, disparity range and offset (docs/rig-format.md)")
+    p.add_argument("--rig", metavar="TOML", help="rig file: focal length, principal point, lens distortion, baseline, axis, positions, disparity range and offset (docs/rig-format.md)")
     p.add_argument(
         "--cameras",
         metavar="TOML",

@@ -10,6 +10,7 @@ documented in ``docs/rig-format.md``; in short::
     height_px = 200
     # cx_px = 99.5                # principal point (default: image centre)
     # cy_px = 99.5
+    # distortion = [-0.1, 0.02, 0.0, 0.0]   # OpenCV's k1, k2, p1, p2(, k3...): undone in every image first
 
     [motion]                      # dynamic stereo (nfdepth dynamic)
     velocity       = [2.0, 0.0, 0.0]   # moving camera rel. to the reference, units / unit time
@@ -46,6 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 
 from ._validate import (
@@ -486,6 +488,10 @@ class Rig:
         ``[video]`` (:func:`nfdepth.video.depth_from_video`).
     source : Path or None
         The file it was read from.
+    distortion : tuple
+        ``[camera] distortion``: OpenCV's lens distortion coefficients
+        (empty: none). The commands undo it in every image first
+        (:meth:`undistort`); their outputs lie on the undistorted pixel grid.
     """
 
     camera: PinholeCamera
@@ -493,6 +499,30 @@ class Rig:
     stereo: StereoSpec | None = None
     video: VideoSpec | None = None
     source: Path | None = None
+    distortion: tuple = ()
+
+    def undistort(self, image) -> np.ndarray:
+        """``image`` with ``[camera] distortion`` undone, on the same pinhole camera (focal length, principal point, size).
+
+        Float32; read with a cubic spline (as turned frames are,
+        :func:`nfdepth._derotation.derotate`); pixels whose undistorted
+        position falls outside the image take the border's value. ``image``
+        itself (as float32) without distortion.
+        """
+        img = np.asarray(image, dtype=np.float32)
+        if not any(self.distortion):
+            return img
+        self.check_image_shape(img.shape, what="the image")
+        maps = self.__dict__.get("_undistort_maps")
+        if maps is None:
+            cam = self.camera
+            k = np.array([[cam.focal_px, 0.0, cam.cx_px], [0.0, cam.focal_px, cam.cy_px], [0.0, 0.0, 1.0]])
+            map_x, map_y = cv2.initUndistortRectifyMap(k, np.array(self.distortion), None, k, (cam.width_px, cam.height_px), cv2.CV_32FC1)
+            maps = (map_x, map_y, None)
+            object.__setattr__(self, "_undistort_maps", maps)  # a rig is immutable: computed once
+        from ._derotation import derotate
+
+        return derotate(img, maps)
 
     def _need(self, section: str):
         spec = getattr(self, section)
@@ -527,14 +557,24 @@ class Rig:
             and self.motion == other.motion
             and self.stereo == other.stereo
             and self.video == other.video
+            and tuple(self.distortion) == tuple(other.distortion)
         )
 
 
 # ----------------------------------------------------------------- parsing
 
 
+def _parse_distortion(table) -> tuple:
+    if not isinstance(table, dict) or "distortion" not in table:
+        return ()
+    d = table["distortion"]
+    if not isinstance(d, list) or len(d) not in (4, 5, 8) or not all(_is_number(v) and math.isfinite(v) for v in d):
+        raise _fail("camera.distortion", d, "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]")
+    return tuple(float(v) for v in d)
+
+
 def _parse_camera(table) -> PinholeCamera:
-    t = _check_keys(table, "camera", ("focal_px", "width_px", "height_px", "cx_px", "cy_px"))
+    t = _check_keys(table, "camera", ("focal_px", "width_px", "height_px", "cx_px", "cy_px", "distortion"))
     focal = _number(t, "camera", "focal_px", positive=True)
     _check_scale("camera.focal_px", t["focal_px"], focal, "a focal length")
     width = _integer(t, "camera", "width_px")
@@ -715,6 +755,7 @@ def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
     base = Path(base_dir) if base_dir is not None else None
     return Rig(
         camera=_parse_camera(data["camera"]),
+        distortion=_parse_distortion(data["camera"]),
         motion=_parse_motion(data["motion"]) if "motion" in data else None,
         stereo=_parse_stereo(data["stereo"]) if "stereo" in data else None,
         video=_parse_video(data["video"], base) if "video" in data else None,
@@ -777,6 +818,8 @@ def rig_to_toml(rig: Rig) -> str:
     cam = rig.camera
     lines = ["[camera]", f"focal_px = {_toml_value(cam.focal_px)}", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
     lines += [f"cx_px = {_toml_value(cam.cx_px)}", f"cy_px = {_toml_value(cam.cy_px)}"]
+    if rig.distortion:
+        lines.append(f"distortion = {_toml_value(list(rig.distortion))}")
     if rig.motion is not None:
         m = rig.motion
         lines += ["", "[motion]", f"velocity = {_toml_value(m.velocity)}", f"rotation_deg = {_toml_value(m.rotation_deg)}"]
@@ -858,7 +901,8 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
     """:func:`nfdepth.pipelines.dynamic_stereo` with the camera, relative motion and frame interval of ``rig``.
 
     ``frames`` are ``I1 .. I5`` (see :func:`nfdepth.pipelines.dynamic_stereo`);
-    their size is checked against ``[camera]`` (:class:`RigError`).
+    their size is checked against ``[camera]`` (:class:`RigError`), and its
+    lens distortion undone first (:meth:`Rig.undistort`).
     ``options`` go to :func:`~nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...).
     This is the library form of ``nfdepth dynamic``.
     """
@@ -869,6 +913,8 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
         raise ValueError(f"dynamic stereo needs exactly 5 images I1..I5, got {len(frames)}")
     for k, f in enumerate(frames, 1):
         rig.check_image_shape(np.shape(f), what=f"image I{k}")
+    if any(rig.distortion):
+        frames = [rig.undistort(f) for f in frames]
     return dynamic_stereo(frames, camera=rig.camera, relative_motion=rig.relative_motion(), frame_interval=rig.frame_interval, **options)
 
 

@@ -669,10 +669,12 @@ def depth_from_video(
     frames : iterable of ndarray, shape (H, W)
         Grey frames in order (e.g. :func:`read_video`). Consumed lazily.
     rig : Rig, optional
-        Gives the camera (``[camera]``) and the motion per frame (``[video]``).
-        Without it, give ``camera`` and one of ``velocity`` / ``positions``.
+        Gives the camera (``[camera]``, whose lens distortion is undone in
+        every frame first: :meth:`nfdepth.rig.Rig.undistort`) and the motion
+        per frame (``[video]``). Without it, give ``camera`` and one of
+        ``velocity`` / ``positions``.
     camera : PinholeCamera, optional
-        Intrinsics (overrides the rig's).
+        Intrinsics (overrides the rig's, and then no distortion is undone).
     velocity : 3 floats, optional
         Camera translation per frame (scene units, camera axes).
     positions : array_like, shape (N, 3), optional
@@ -827,6 +829,8 @@ def depth_from_video(
                 rig.check_image_shape(img.shape, what=f"frame {first + n}")
             msg = f"frame {first + n} has size {img.shape[1]}x{img.shape[0]}, the camera {cam.width_px}x{cam.height_px}"
             raise ValueError(msg)
+        if rig is not None and camera is None and any(rig.distortion):
+            img = rig.undistort(img)
         window.append(img)
         if len(window) < 3:
             continue
