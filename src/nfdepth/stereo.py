@@ -1079,10 +1079,11 @@ def _scatter_factor(diff, std, ok, er, ec, shape, window_px, dense_var):
     the local mean would leave out). Its ratio to the mean of ``std**2``
     widens the std. 1 where fewer than about three accepted points are near.
     """
-    channels = np.stack([ok, np.where(ok, diff * diff, 0.0), np.where(ok, std * std, 0.0), np.where(ok & np.isfinite(dense_var), dense_var, 0.0)], axis=1)  # one 4-channel blur
-    w, x2s, vs, dvs = np.moveaxis(_pooled_at_points(channels.astype(np.float32), er, ec, shape, window_px), 1, 0)
+    own = diff * diff - np.where(np.isfinite(dense_var), dense_var, 0.0)  # pooled linearly: one channel for both sums
+    channels = np.stack([ok, np.where(ok, own, 0.0), np.where(ok, std * std, 0.0)], axis=1)  # one 3-channel blur
+    w, own_s, vs = np.moveaxis(_pooled_at_points(channels.astype(np.float32), er, ec, shape, window_px), 1, 0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = (x2s - dvs) / vs  # the weights w cancel
+        ratio = own_s / vs  # the weights w cancel
         # about three points' weight at the window's centre: a Gaussian of sigma s peaks at 1 / (2 pi s^2)
         # (written as a product: no division by a window's square that underflows)
         enough = w * (2.0 * math.pi * window_px**2) >= 3.0
