@@ -379,3 +379,16 @@ def test_the_example_cameras_scale_with_the_image():
     assert _scores(r.depth, scene.depths[1])[1] < 0.005
     with pytest.raises(ValueError, match="reference_index must index one of the 3 cameras, got 3"):
         calibrated_plane_row(reference_index=3)
+
+
+def test_cameras_of_other_sizes_are_resampled_to_the_reference():
+    """A camera with the reference's matrix and orientation but a larger image (its extra columns and rows beyond
+    the reference's) is resampled to the reference's size, not passed as taken."""
+    ref = camera(400.0, 89.5, 59.5, (0.0, 0.0, 0.0))
+    big = camera(400.0, 89.5, 59.5, (0.1, 0.0, 0.0), shape=(140, 200))
+    left = camera(400.0, 89.5, 59.5, (-0.1, 0.0, 0.0))
+    views, depths = render([left, ref, big])
+    r = calibrated_row_depth(views, [left, ref, big], reference=1)
+    assert all(v.shape == SHAPE for v in r.row.views)
+    np.testing.assert_array_equal(r.row.views[2], views[2][: SHAPE[0], : SHAPE[1]])
+    assert _scores(r.depth, depths[1])[1] < 0.005

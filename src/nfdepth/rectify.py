@@ -352,7 +352,8 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
     rect_views, inside = [], []
     for k in order:
         cam = cameras[k]
-        if not np.any(cam.distortion) and np.array_equal(cam.matrix, new_matrix) and np.allclose(cam.rotation, rect, rtol=0.0, atol=1e-12):
+        same_camera = cam.shape == (h, w) and np.array_equal(cam.matrix, new_matrix) and not np.any(cam.distortion)
+        if same_camera and np.allclose(cam.rotation, rect, rtol=0.0, atol=1e-12):
             rect_views.append(np.array(views[k], dtype=np.float32))  # rectified as taken: no resampling
             inside.append(np.ones((h, w), bool))
             continue
