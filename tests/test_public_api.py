@@ -26,6 +26,7 @@ COMMANDS = {
         "stereo_options_from_rig",
         "load_cameras",
         "calibrated_row_depth",
+        "calibrated_grid_depth",
         "read_image",
         "write_array",
         "write_colormap_png",

@@ -21,7 +21,8 @@ Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
     static_stereo, StereoResult, fill_background; x and y baselines
     together: static_stereo_xy, XYStereoResult; a calibrated row of cameras
     that is not rectified: calibrated_row_depth, CalibratedCamera,
-    load_cameras (module ``rectify``)
+    load_cameras; a row and a column of them: calibrated_grid_depth
+    (module ``rectify``)
 Files
     read_image, write_array, write_colormap_png, read_pfm, write_pfm,
     write_ply, depth_to_points
@@ -35,7 +36,8 @@ command                     functions
 ``nfdepth stereo``          static_stereo; with ``--column``:
                             static_stereo_xy; with ``--rig``: load_rig,
                             stereo_options_from_rig; with ``--cameras``:
-                            load_cameras, calibrated_row_depth
+                            load_cameras, calibrated_row_depth (and
+                            ``--column``: calibrated_grid_depth)
 ``nfdepth dynamic I1..I5``  load_rig, dynamic_stereo_from_rig, edge_depth_maps
 ``nfdepth dynamic``         load_rig, read_video, dynamic_stereo_from_videos
 ``--moving-video M``        (:class:`CrossingDepth`), interleaved_frames,
@@ -118,6 +120,7 @@ _LAZY = {
     "DataDownloadError": "fetch",
     "CalibratedCamera": "rectify",
     "calibrated_row_depth": "rectify",
+    "calibrated_grid_depth": "rectify",
     "load_cameras": "rectify",
 }
 
@@ -126,7 +129,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .evaluate import disparity_errors, evaluate_dataset, evaluate_scene
     from .experiments import run_paper_experiment
     from .fetch import DataDownloadError, default_data_dir, fetch_data
-    from .rectify import CalibratedCamera, calibrated_row_depth, load_cameras
+    from .rectify import CalibratedCamera, calibrated_grid_depth, calibrated_row_depth, load_cameras
     from .rig import Rig, RigError, dynamic_stereo_from_rig, edge_depth_maps, load_rig, stereo_options_from_rig
     from .video import (
         CrossingDepth,

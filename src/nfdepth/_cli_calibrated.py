@@ -10,9 +10,7 @@ import numpy as np
 _REFUSED = {
     "rig": "the cameras file gives the whole geometry",
     "positions": "the positions come from the cameras' centres",
-    "column": "a column needs its own rectification (run the row and the column separately)",
-    "column_reference": "a column needs its own rectification",
-    "column_positions": "a column needs its own rectification",
+    "column_positions": "the column's positions come from its cameras' centres (--column-cameras)",
     "focal_px": "the cameras give the focal lengths",
     "baseline": "the cameras' centres give the baseline",
     "disparity_offset_px": "the rectified views share one principal point",
@@ -34,7 +32,7 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
         write_colormap_png,
         write_ply,
     )
-    from .rectify import calibrated_row_depth, load_cameras
+    from .rectify import calibrated_grid_depth, calibrated_row_depth, load_cameras
 
     for key, why in _REFUSED.items():
         value = getattr(args, key, None)
@@ -47,10 +45,25 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
+    column = args.column or []
+    if bool(column) != bool(args.column_cameras):
+        raise CLIError("--column and --column-cameras go together with --cameras: the column's views and their calibrated cameras")
+    if args.column_reference is not None and not column:
+        raise CLIError("--column-reference needs --column (the views of the second line)")
+    column_reference = None
+    if column:
+        if len(column) < 2:
+            raise CLIError(f"--column needs at least 2 views (3 or more recommended), got {len(column)}")
+        column_reference = len(column) // 2 if args.column_reference is None else args.column_reference
+        if not 0 <= column_reference < len(column):
+            raise CLIError(f"--column-reference must index one of the {len(column)} column views (0..{len(column) - 1}), got {column_reference}")
     cameras = load_cameras(args.cameras)
     if len(cameras) != len(args.views):
         raise CLIError(f"cameras '{args.cameras}' has {len(cameras)} [[camera]] tables for {len(args.views)} views: expected one per view, in the order of the views")
-    inputs = [*args.views, args.cameras]
+    column_cameras = load_cameras(args.column_cameras) if column else []
+    if len(column_cameras) != len(column):
+        raise CLIError(f"cameras '{args.column_cameras}' has {len(column_cameras)} [[camera]] tables for {len(column)} column views: expected one per view, in their order")
+    inputs = [*args.views, *column, args.cameras, args.column_cameras]
     outputs = [check_output(args.out, force=args.force, inputs=inputs)]
     if args.uncertainty:
         outputs.append(check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
@@ -63,18 +76,24 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
     if len({str(p.resolve()) for p in every}) != len(every):
         raise CLIError("output paths must differ from each other")
     views = [read_image(v) for v in args.views]
-    for k, (path, view, cam) in enumerate(zip(args.views, views, cameras)):
-        if view.shape != cam.shape:
-            raise CLIError(
-                f"view {k} '{Path(path).name}' is {view.shape[1]}x{view.shape[0]} px, its camera (camera[{k}] of '{args.cameras}') "
-                f"{cam.width_px}x{cam.height_px}: expected the size the camera was calibrated at"
-            )
+    column_views = [read_image(v) for v in column]
+    for what, paths, imgs, cams, source in (("view", args.views, views, cameras, args.cameras), ("column view", column, column_views, column_cameras, args.column_cameras)):
+        for k, (path, view, cam) in enumerate(zip(paths, imgs, cams)):
+            if view.shape != cam.shape:
+                raise CLIError(
+                    f"{what} {k} '{Path(path).name}' is {view.shape[1]}x{view.shape[0]} px, its camera (camera[{k}] of '{source}') "
+                    f"{cam.width_px}x{cam.height_px}: expected the size the camera was calibrated at"
+                )
     options = {"edges_only": args.edges_only}
     for key, name in (("sigma_px", "sigma_px"), ("levels", "levels"), ("threads", "threads"), ("cost_step_px", "cost_step_px")):
         value = getattr(args, key)
         if value is not None:
             options[name] = value
-    res = calibrated_row_depth(views, cameras, reference=reference, **options)
+    if column:
+        res = calibrated_grid_depth(views, cameras, column_views, column_cameras, row_reference=reference, column_reference=column_reference, **options)
+        line = res.row
+    else:
+        res = line = calibrated_row_depth(views, cameras, reference=reference, **options)
     hint = "give the cameras' positions in a unit that keeps depths in that range"
     depth = to_float32_map(res.depth, what="a depth", hint=hint)
     std = to_float32_map(res.depth_std, what="a standard deviation", hint=hint)
@@ -94,10 +113,13 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
     valid = np.isfinite(depth)
     finite = depth[valid]
     rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} scene units" if finite.size else "none"
-    spacing = np.diff(res.row.positions)
+    spacing = np.diff(line.row.positions)
+    fused = ""
+    if column:
+        fused = f", fused with a column of {len(column_views)} cameras ({int(np.count_nonzero(res.line_count == 2))} pixels from both, {int(np.count_nonzero(res.conflict))} refused for disagreeing)"
     print(
         f"depth for view {reference} ({name}), rectified row of {len(views)} cameras (spacing {np.min(spacing):.3g}..{np.max(spacing):.3g} scene units, "
-        f"farthest centre {np.max(res.row.off_line):.2g} off the line): {int(valid.sum())} of {valid.size} pixels ({100.0 * valid.mean():.1f} %), "
-        f"range {rng_txt}, {res.result.runtime_s:.2f} s, {res.result.levels} levels -> {outputs[0]}"
+        f"farthest centre {np.max(line.row.off_line):.2g} off the line){fused}: {int(valid.sum())} of {valid.size} pixels ({100.0 * valid.mean():.1f} %), "
+        f"range {rng_txt}, {line.result.runtime_s:.2f} s, {line.result.levels} levels -> {outputs[0]}"
     )
     return 0

@@ -355,6 +355,8 @@ def _cmd_stereo(args) -> int:
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
+    if args.column_cameras and not args.cameras:
+        raise CLIError("--column-cameras needs --cameras (the row's calibrated cameras); a rectified column takes --column alone")
     if args.cameras:
         from ._cli_calibrated import run_calibrated_stereo
         from ._cli_rig import figure_outputs, write_figures
@@ -681,6 +683,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="calibrated cameras, one [[camera]] per view (intrinsics, lens distortion, pose): the views need not be rectified; "
         "output is depth in the reference camera's own pixels (docs/rig-format.md, 'Calibrated cameras')",
     )
+    p.add_argument("--column-cameras", metavar="TOML", help="with --cameras and --column: the column's calibrated cameras, one [[camera]] per column view")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_stereo)
 

@@ -51,6 +51,7 @@ __all__ = [
     "CalibratedCamera",
     "CalibratedRowDepth",
     "RectifiedRow",
+    "calibrated_grid_depth",
     "calibrated_row_depth",
     "cameras_from_dict",
     "cameras_to_toml",
@@ -414,14 +415,19 @@ class CalibratedRowDepth:
         order, and uint8 RGB ``(N, 3)`` from ``image`` (grey or RGB of the
         reference's size; float values rounded and clipped to 0..255) or None.
         """
-        from .io import depth_to_points
+        return _depth_points(self.row.camera, self.depth, image)
 
-        xy = self.row.camera.rays()
-        keep = np.isfinite(self.depth) & (self.depth > 0) & np.isfinite(xy).all(axis=-1)
-        _, colors = depth_to_points(np.where(keep, 1.0, np.nan), focal_px=1.0, image=image)
-        z = self.depth[keep].astype(np.float64)
-        pts = np.stack([xy[..., 0][keep] * z, xy[..., 1][keep] * z, z], axis=1).astype(np.float32)
-        return pts, colors
+
+def _depth_points(camera: CalibratedCamera, depth, image):
+    """``depth`` (the camera's own pixels) as points in its axes along its rays, with colours from ``image``."""
+    from .io import depth_to_points
+
+    xy = camera.rays()
+    keep = np.isfinite(depth) & (depth > 0) & np.isfinite(xy).all(axis=-1)
+    _, colors = depth_to_points(np.where(keep, 1.0, np.nan), focal_px=1.0, image=image)
+    z = depth[keep].astype(np.float64)
+    pts = np.stack([xy[..., 0][keep] * z, xy[..., 1][keep] * z, z], axis=1).astype(np.float32)
+    return pts, colors
 
 
 def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) -> CalibratedRowDepth:
@@ -603,3 +609,97 @@ def cameras_to_toml(cameras) -> str:
         lines.append(f"rotation_deg = {numbers(np.degrees(cv2.Rodrigues(cam.rotation)[0]))}")
         lines.append("")
     return "\n".join(lines)
+
+
+# ----------------------------------------------------------------- two lines
+
+
+@dataclass(frozen=True)
+class CalibratedGridDepth:
+    """Depth of a row and a column of calibrated cameras through one reference camera, fused (:func:`calibrated_grid_depth`).
+
+    ``depth``, ``depth_std``, ``edge_mask`` as :class:`CalibratedRowDepth`
+    (the reference camera's own pixels); ``line_count``: how many of the two
+    lines gave the pixel a value; ``conflict``: pixels both gave values too
+    far apart to fuse (NaN); ``row``, ``column``: each line's
+    :class:`CalibratedRowDepth`.
+    """
+
+    depth: np.ndarray
+    depth_std: np.ndarray
+    edge_mask: np.ndarray
+    line_count: np.ndarray
+    conflict: np.ndarray
+    row: CalibratedRowDepth
+    column: CalibratedRowDepth
+
+    def points(self, *, image=None):
+        """The fused depth as 3-D points in the reference camera's axes (:meth:`CalibratedRowDepth.points`)."""
+        return _depth_points(self.row.row.camera, self.depth, image)
+
+
+def calibrated_grid_depth(
+    row_views, row_cameras, column_views, column_cameras, *, row_reference: int, column_reference: int, max_line_disagreement_px: float = 0.5, **stereo_options
+) -> CalibratedGridDepth:
+    """Depth from two lines of calibrated cameras through the same reference camera, fused per pixel.
+
+    Each line runs :func:`calibrated_row_depth` on its own (a line along
+    the reference's X axis, one along its Y axis, or any two); the paper's
+    suggested fix for edges parallel to one baseline. The two depths of a
+    pixel are fused by weighted least squares on inverse depth, the variance
+    widened by their reduced chi^2 when above 1 (as
+    :func:`nfdepth.xy_stereo.fuse_axes` does for rectified rows); a pixel
+    whose two values differ by more than ``max_line_disagreement_px`` px of
+    disparity at the nearest neighbour spacing and by more than 3 standard
+    deviations is NaN (``conflict``).
+
+    Raises
+    ------
+    ValueError
+        The two lines' reference cameras or images differ.
+    """
+    from ._validate import check_positive_or_inf
+
+    limit = check_positive_or_inf("max_line_disagreement_px", max_line_disagreement_px)
+    row_cameras, column_cameras = list(row_cameras), list(column_cameras)
+    for name, cams, ref in (("row", row_cameras, row_reference), ("column", column_cameras, column_reference)):
+        if isinstance(ref, (bool, np.bool_)) or not isinstance(ref, (int, np.integer)) or not 0 <= ref < len(cams):
+            msg = f"{name}_reference must be an integer index of the {name}'s cameras, 0..{len(cams) - 1}, got {ref!r}"
+            raise ValueError(msg)
+    if row_cameras[row_reference] != column_cameras[column_reference]:
+        msg = "the row's and the column's reference cameras must be the same camera: both lines pass through it"
+        raise ValueError(msg)
+    if not np.array_equal(np.asarray(row_views[row_reference]), np.asarray(column_views[column_reference])):
+        msg = "the row's and the column's reference views must be the same image: both lines pass through the reference camera"
+        raise ValueError(msg)
+    a = calibrated_row_depth(row_views, row_cameras, reference=row_reference, **stereo_options)
+    b = calibrated_row_depth(column_views, column_cameras, reference=column_reference, **stereo_options)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rho = [1.0 / np.asarray(r.depth, np.float64) for r in (a, b)]
+        var = [(np.asarray(r.depth_std, np.float64) * p**2) ** 2 for r, p in zip((a, b), rho)]
+    ok = [np.isfinite(p) & np.isfinite(v) & (v > 0) for p, v in zip(rho, var)]
+    both = ok[0] & ok[1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = [np.where(o, 1.0 / v, 0.0) for o, v in zip(ok, var)]
+        diff = np.where(both, rho[0] - rho[1], 0.0)
+        chi2 = np.where(both, diff**2 / (var[0] + var[1]), 0.0)
+        fused = np.where(both, (w[0] * np.where(ok[0], rho[0], 0.0) + w[1] * np.where(ok[1], rho[1], 0.0)) / (w[0] + w[1]), np.where(ok[0], rho[0], rho[1]))
+        fused_var = np.where(both, np.maximum(chi2, 1.0) / (w[0] + w[1]), np.where(ok[0], var[0], var[1]))
+    # the disagreement as a disparity: px at the nearest neighbour spacing of either line, f rho b
+    step = min(float(np.min(np.diff(r.row.positions))) for r in (a, b))
+    conflict = both & (np.abs(diff) * a.row.focal_px * step > limit) & (chi2 > 9.0)
+    good = (ok[0] | ok[1]) & ~conflict
+    with np.errstate(divide="ignore", invalid="ignore"):
+        depth = np.where(good, 1.0 / fused, np.nan)
+        depth_std = np.where(good, np.sqrt(fused_var) / fused**2, np.nan)
+    count = (ok[0].astype(np.uint8) + ok[1].astype(np.uint8)) * good
+    edges = (a.edge_mask | b.edge_mask) & good
+    return CalibratedGridDepth(
+        depth=depth.astype(np.float32),
+        depth_std=depth_std.astype(np.float32),
+        edge_mask=edges,
+        line_count=count.astype(np.uint8),
+        conflict=conflict,
+        row=a,
+        column=b,
+    )
