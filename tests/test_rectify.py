@@ -231,6 +231,7 @@ def test_cli_stereo_with_cameras_refuses_what_does_not_fit(capfd, tmp_path, row_
         (["--positions", "0", "1", "2"], "--positions does not go with --cameras"),
         (["--axis", "y"], "--axis does not go with --cameras"),
         (["--fill"], "--fill does not go with --cameras"),
+        (["--cost-step-px", "-1"], "--cost-step-px must be a positive number, got -1"),
     ]
     for extra, message in cases:
         code, _, err = run_cli(capfd, "stereo", *names, "--cameras", cams, "--out", tmp_path / "x.tif", *extra)

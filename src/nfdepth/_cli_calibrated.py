@@ -1,4 +1,4 @@
-"""``nfdepth stereo --cameras FILE``: depth from a calibrated row of cameras that is not rectified (:mod:`nfdepth.rectify`)."""
+"""``nfdepth stereo --cameras FILE [--column ... --column-cameras FILE]``: depth from a calibrated row (and column) of cameras that is not rectified (:mod:`nfdepth.rectify`)."""
 
 from __future__ import annotations
 
@@ -42,6 +42,9 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
         raise CLIError("--axis does not go with --cameras: the row's direction comes from the cameras' centres")
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
+    from .cli import _positive
+
+    _positive("--cost-step-px", args.cost_step_px)
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
