@@ -289,6 +289,8 @@ def _cmd_demo(args) -> int:
         f"{out / 'depth.png'}, {out / 'points.ply'} ({len(pts)} points)"
     )
     print(f"  the same from the files: nfdepth stereo {' '.join(str(n) for n in names)} --edges-only --focal-px 100 --baseline 2 --out depth.pfm --ply points.ply")
+    calibrated_names = " ".join(str(example / f"calibrated_view{k}.png") for k in range(len(calibrated.views)))
+    print(f"  a calibrated row that is not rectified: nfdepth stereo {calibrated_names} --cameras {example / 'calibrated_cameras.toml'} --out depth.pfm")
     print(f"figures written to {out}/")
     return EXIT_OK
 
