@@ -70,9 +70,11 @@ def turned_view(image, cam, *, focal_px):
     the camera's pixels' rays (its turn and lens distortion undone) meets it; exact for any depth (a pure turn)."""
     from scipy import ndimage
 
+    from nfdepth._derotation import turn_rays
+
     h, w = image.shape
     xy = cam.rays()
-    ray = np.einsum("ij,hwj->hwi", cam.rotation, np.concatenate([xy, np.ones(xy.shape[:2] + (1,))], axis=-1))
-    col = (w - 1) / 2 + focal_px * ray[..., 0] / ray[..., 2]
-    row = (h - 1) / 2 + focal_px * ray[..., 1] / ray[..., 2]
+    rx, ry, rz = turn_rays(cam.rotation, xy[..., 0], xy[..., 1])
+    col = (w - 1) / 2 + focal_px * rx / rz
+    row = (h - 1) / 2 + focal_px * ry / rz
     return ndimage.map_coordinates(np.asarray(image, np.float32), [row, col], order=3, mode="nearest").astype(np.float32)

@@ -22,8 +22,10 @@ _REFUSED = {
 }
 
 
-def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write_figures) -> int:
+def run_calibrated_stereo(args, CLIError) -> int:
     """The ``--cameras`` branch of ``nfdepth stereo``: depth (scene units) in the reference camera's own pixels."""
+    from ._cli_rig import write_figures
+    from .cli import _positive, _stereo_outputs
     from .io import (
         read_image,
         to_float32_map,
@@ -42,8 +44,6 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
         raise CLIError("--axis does not go with --cameras: the row's direction comes from the cameras' centres")
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
-    from .cli import _positive
-
     _positive("--cost-step-px", args.cost_step_px)
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
@@ -66,18 +66,7 @@ def run_calibrated_stereo(args, CLIError, *, check_output, figure_outputs, write
     column_cameras = load_cameras(args.column_cameras) if column else []
     if len(column_cameras) != len(column):
         raise CLIError(f"cameras '{args.column_cameras}' has {len(column_cameras)} [[camera]] tables for {len(column)} column views: expected one per view, in their order")
-    inputs = [*args.views, *column, args.cameras, args.column_cameras]
-    outputs = [check_output(args.out, force=args.force, inputs=inputs)]
-    if args.uncertainty:
-        outputs.append(check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
-    if args.preview:
-        outputs.append(check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs))
-    if args.ply:
-        outputs.append(check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
-    figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
-    every = outputs + list(figures.values())
-    if len({str(p.resolve()) for p in every}) != len(every):
-        raise CLIError("output paths must differ from each other")
+    outputs, figures = _stereo_outputs(args, [*args.views, *column, args.cameras, args.column_cameras])  # (--fill-mask was refused above)
     views = [read_image(v) for v in args.views]
     column_views = [read_image(v) for v in column]
     for what, paths, imgs, cams, source in (("view", args.views, views, cameras, args.cameras), ("column view", column, column_views, column_cameras, args.column_cameras)):

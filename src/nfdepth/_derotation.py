@@ -29,16 +29,21 @@ from .camera import PinholeCamera
 STILL_PX = 1e-6
 
 
-def grid_rays(rotation, x, y) -> list[np.ndarray]:
-    """``rotation @ (x, y, 1)`` on the grid of normalised coordinates ``x`` (columns) by ``y`` (rows).
+def turn_rays(rotation, x, y) -> list[np.ndarray]:
+    """``rotation @ (x, y, 1)`` for normalised coordinates ``x``, ``y`` (any broadcasting shapes).
 
-    Three ``(len(y), len(x))`` float64 arrays, the ray's components, built
-    by columns of ``rotation`` (no ``(H, W, 3)`` temporary).
+    Three float64 arrays, the ray's components, built by columns of
+    ``rotation`` (no ``(..., 3)`` temporary).
     """
     r = np.asarray(rotation, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
-    return [r[i, 0] * x[None, :] + r[i, 1] * y[:, None] + r[i, 2] for i in range(3)]
+    return [r[i, 0] * x + r[i, 1] * y + r[i, 2] for i in range(3)]
+
+
+def grid_rays(rotation, x, y) -> list[np.ndarray]:
+    """:func:`turn_rays` on the grid of normalised coordinates ``x`` (columns) by ``y`` (rows): three ``(len(y), len(x))`` arrays."""
+    return turn_rays(rotation, np.asarray(x, dtype=np.float64)[None, :], np.asarray(y, dtype=np.float64)[:, None])
 
 
 def derotation_maps(camera: PinholeCamera, rotation, *, grid=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

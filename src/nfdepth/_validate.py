@@ -278,6 +278,15 @@ def _as_int(name: str, value, what: str) -> int:
     return int(item)
 
 
+def check_image_size(owner, names=("width_px", "height_px")) -> None:
+    """Raise ValueError unless each of ``owner``'s attributes ``names`` is a positive integer (an image size in pixels)."""
+    for name in names:
+        value = getattr(owner, name)
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+            msg = f"{name} must be a positive integer, got {value!r}"
+            raise ValueError(msg)
+
+
 def check_int(name: str, value, minimum: int) -> int:
     """Return ``value`` as int, or raise if it is not an integer >= ``minimum``.
 

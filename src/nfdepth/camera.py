@@ -16,7 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import UNIT_SCALE_RANGE, as_vector3, check_finite, check_within
+from ._validate import (
+    UNIT_SCALE_RANGE,
+    as_vector3,
+    check_finite,
+    check_image_size,
+    check_within,
+)
 
 __all__ = [
     "PinholeCamera",
@@ -109,11 +115,7 @@ class PinholeCamera:
             self.focal_px,
             advice="expected a focal length in pixels in that range (beyond it the normalised coordinates and depths overflow or vanish in float arithmetic)",
         )
-        for name in ("width_px", "height_px"):
-            value = getattr(self, name)
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
-                msg = f"{name} must be a positive integer, got {value!r}"
-                raise ValueError(msg)
+        check_image_size(self)
         if self.cx_px is None:
             object.__setattr__(self, "cx_px", (self.width_px - 1) / 2.0)
         if self.cy_px is None:

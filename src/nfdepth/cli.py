@@ -351,6 +351,28 @@ def _positive(name: str, value):
     return float(value)
 
 
+def _stereo_outputs(args, inputs) -> tuple[list, dict]:
+    """``nfdepth stereo``'s output paths, checked before any work: ``[--out, --uncertainty, --fill-mask, --preview, --ply]`` (those given) and the figures."""
+    from ._cli_rig import figure_outputs
+
+    outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
+    if args.fill_mask and not args.fill:
+        raise CLIError("--fill-mask needs --fill")
+    if args.uncertainty:
+        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
+    if args.fill_mask:
+        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask", inputs=inputs))
+    if args.preview:
+        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs))
+    if args.ply:
+        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
+    figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
+    every = outputs + list(figures.values())
+    if len({str(p.resolve()) for p in every}) != len(every):
+        raise CLIError("output paths must differ from each other")
+    return outputs, figures
+
+
 def _cmd_stereo(args) -> int:
     from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
     from .stereo import check_depth_scale, check_disparity_offset, static_stereo
@@ -361,9 +383,8 @@ def _cmd_stereo(args) -> int:
         raise CLIError("--column-cameras needs --cameras (the row's calibrated cameras); a rectified column takes --column alone")
     if args.cameras:
         from ._cli_calibrated import run_calibrated_stereo
-        from ._cli_rig import figure_outputs, write_figures
 
-        return run_calibrated_stereo(args, CLIError, check_output=_check_output, figure_outputs=figure_outputs, write_figures=write_figures)
+        return run_calibrated_stereo(args, CLIError)
     principal_point_given = [f"--{k.replace('_', '-')}" for k in ("cx_px", "cy_px") if getattr(args, k) is not None]
     rig = None
     if args.rig:
@@ -444,24 +465,9 @@ def _cmd_stereo(args) -> int:
         lo, hi = args.disparity_range
         if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
             raise CLIError(f"--disparity-range must be two finite numbers MIN < MAX, got {lo:g} {hi:g}")
-    inputs = [*args.views, *column, args.rig]
-    outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
-    if args.fill_mask and not args.fill:
-        raise CLIError("--fill-mask needs --fill")
-    if args.uncertainty:
-        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
-    if args.fill_mask:
-        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask", inputs=inputs))
-    if args.preview:
-        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs))
-    if args.ply:
-        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
-    from ._cli_rig import figure_outputs, write_figures
+    outputs, figures = _stereo_outputs(args, [*args.views, *column, args.rig])
+    from ._cli_rig import write_figures
 
-    figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
-    every = outputs + list(figures.values())
-    if len({str(p.resolve()) for p in every}) != len(every):
-        raise CLIError("output paths must differ from each other")
     views = [read_image(v) for v in args.views]
     column_views = [read_image(v) for v in column]
     shapes = {v.shape for v in views + column_views}

@@ -59,6 +59,7 @@ __all__ = [
     "write_colormap_png",
     "write_ply",
     "depth_to_points",
+    "point_colors",
     "to_rgb8",
 ]
 
@@ -736,19 +737,24 @@ def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
     rows, cols = np.nonzero(keep)
     zz = z[rows, cols]
     pts = np.stack([(cols - cx) * zz / f, (rows - cy) * zz / f, zz], axis=1).astype(np.float32)
-    colors = None
-    if image is not None:
-        img = np.asarray(image)
-        if img.shape[:2] != z.shape or not (img.ndim == 2 or (img.ndim == 3 and img.shape[-1] in (3, 4))):
-            msg = f"image must have shape {z.shape} or {z.shape + (3,)} like depth, got shape {img.shape}"
-            raise ValueError(msg)
-        if img.ndim == 2:
-            img = np.repeat(img[..., None], 3, axis=2)
-        img = img[..., :3]
-        if img.dtype != np.uint8:
-            img = np.clip(np.rint(np.nan_to_num(img.astype(np.float64))), 0, 255).astype(np.uint8)
-        colors = np.ascontiguousarray(img[rows, cols])
-    return pts, colors
+    return pts, point_colors(image, rows, cols, z.shape)
+
+
+def point_colors(image, rows, cols, shape):
+    """RGB (uint8, ``(N, 3)``) of ``image`` at the pixels ``rows, cols`` of a ``shape`` map, as :func:`depth_to_points` colours its points; None without an image."""
+    if image is None:
+        return None
+    img = np.asarray(image)
+    shape = tuple(shape)
+    if img.shape[:2] != shape or not (img.ndim == 2 or (img.ndim == 3 and img.shape[-1] in (3, 4))):
+        msg = f"image must have shape {shape} or {shape + (3,)} like depth, got shape {img.shape}"
+        raise ValueError(msg)
+    if img.ndim == 2:
+        img = np.repeat(img[..., None], 3, axis=2)
+    img = img[..., :3]
+    if img.dtype != np.uint8:
+        img = np.clip(np.rint(np.nan_to_num(img.astype(np.float64))), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(img[rows, cols])
 
 
 def to_rgb8(image) -> np.ndarray:

@@ -38,12 +38,13 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
 
-from ._derotation import derotate, grid_rays
-from ._validate import as_vector3
+from ._derotation import derotate, grid_rays, turn_rays
+from ._validate import as_vector3, check_image_size
 
 __all__ = [
     "MAX_OFF_LINE",
@@ -109,11 +110,7 @@ class CalibratedCamera:
         if not (k[0, 0] > 0 and k[1, 1] > 0) or k[1, 0] != 0 or np.any(k[2] != (0.0, 0.0, 1.0)):
             msg = f"matrix must be an intrinsic matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0 px, got {k.tolist()}"
             raise ValueError(msg)
-        for name in ("width_px", "height_px"):
-            value = getattr(self, name)
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
-                msg = f"{name} must be a positive integer, got {value!r}"
-                raise ValueError(msg)
+        check_image_size(self)
         r = _as_matrix("rotation", self.rotation, (3, 3))
         if not np.allclose(r.T @ r, np.eye(3), atol=1e-6) or not np.linalg.det(r) > 0:
             msg = f"rotation must be a rotation matrix (orthonormal, determinant +1), got {r.tolist()}"
@@ -222,7 +219,7 @@ class RectifiedRow:
         ``(depth, std)``.
         """
         rays = self.camera.rays()
-        turned = grid_rays_from(self.rotation.T @ self.camera.rotation, rays)
+        turned = turn_rays(self.rotation.T @ self.camera.rotation, rays[..., 0], rays[..., 1])
         h, w = np.asarray(depth).shape
         with np.errstate(divide="ignore", invalid="ignore"):
             col = np.rint(self.cx_px + self.focal_px * turned[0] / turned[2])
@@ -236,13 +233,6 @@ class RectifiedRow:
         if std is None:
             return out.astype(np.float32)
         return out.astype(np.float32), (np.asarray(std, dtype=np.float64)[r, c] * scale).astype(np.float32)
-
-
-def grid_rays_from(rotation, rays) -> list[np.ndarray]:
-    """``rotation @ (x, y, 1)`` for an ``(H, W, 2)`` field of ``(x, y)``: three ``(H, W)`` arrays."""
-    r = np.asarray(rotation, dtype=np.float64)
-    x, y = rays[..., 0], rays[..., 1]
-    return [r[i, 0] * x + r[i, 1] * y + r[i, 2] for i in range(3)]
 
 
 def _row_line(centres: np.ndarray, reference_rotation: np.ndarray) -> tuple[np.ndarray, str]:
@@ -420,14 +410,15 @@ class CalibratedRowDepth:
 
 def _depth_points(camera: CalibratedCamera, depth, image):
     """``depth`` (the camera's own pixels) as points in its axes along its rays, with colours from ``image``."""
-    from .io import depth_to_points
+    from .io import point_colors
 
     xy = camera.rays()
-    keep = np.isfinite(depth) & (depth > 0) & np.isfinite(xy).all(axis=-1)
-    _, colors = depth_to_points(np.where(keep, 1.0, np.nan), focal_px=1.0, image=image)
-    z = depth[keep].astype(np.float64)
-    pts = np.stack([xy[..., 0][keep] * z, xy[..., 1][keep] * z, z], axis=1).astype(np.float32)
-    return pts, colors
+    with np.errstate(invalid="ignore"):
+        keep = np.isfinite(depth) & (depth > 0) & np.isfinite(xy).all(axis=-1)
+    rows, cols = np.nonzero(keep)
+    z = depth[rows, cols].astype(np.float64)
+    pts = np.stack([xy[rows, cols, 0] * z, xy[rows, cols, 1] * z, z], axis=1).astype(np.float32)
+    return pts, point_colors(image, rows, cols, depth.shape)
 
 
 def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) -> CalibratedRowDepth:
@@ -659,6 +650,8 @@ def calibrated_grid_depth(
         The two lines' reference cameras or images differ.
     """
     from ._validate import check_positive_or_inf
+    from .depth import Reason
+    from .xy_stereo import fuse_axes
 
     limit = check_positive_or_inf("max_line_disagreement_px", max_line_disagreement_px)
     row_cameras, column_cameras = list(row_cameras), list(column_cameras)
@@ -674,31 +667,27 @@ def calibrated_grid_depth(
         raise ValueError(msg)
     a = calibrated_row_depth(row_views, row_cameras, reference=row_reference, **stereo_options)
     b = calibrated_row_depth(column_views, column_cameras, reference=column_reference, **stereo_options)
+    # each line's inverse depth as a disparity in px at the nearest neighbour spacing of either line
+    # (f rho b: the unit of max_line_disagreement_px), fused as two rectified axes are
+    scale = a.row.focal_px * min(float(np.min(np.diff(r.row.positions))) for r in (a, b))
+    lines = []
+    for r in (a, b):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho = 1.0 / np.asarray(r.depth, np.float64)
+            rho_std = np.asarray(r.depth_std, np.float64) * rho**2
+        ok = np.isfinite(rho) & np.isfinite(rho_std) & (rho_std > 0)
+        lines.append(SimpleNamespace(disparity=scale * rho, uncertainty=scale * rho_std, reason=np.where(ok, Reason.OK, Reason.NO_DATA).astype(np.uint8)))
+    disparity, std, _reason, count, conflict = fuse_axes(*lines, max_axis_disagreement_px=limit)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rho = [1.0 / np.asarray(r.depth, np.float64) for r in (a, b)]
-        var = [(np.asarray(r.depth_std, np.float64) * p**2) ** 2 for r, p in zip((a, b), rho)]
-    ok = [np.isfinite(p) & np.isfinite(v) & (v > 0) for p, v in zip(rho, var)]
-    both = ok[0] & ok[1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w = [np.where(o, 1.0 / v, 0.0) for o, v in zip(ok, var)]
-        diff = np.where(both, rho[0] - rho[1], 0.0)
-        chi2 = np.where(both, diff**2 / (var[0] + var[1]), 0.0)
-        fused = np.where(both, (w[0] * np.where(ok[0], rho[0], 0.0) + w[1] * np.where(ok[1], rho[1], 0.0)) / (w[0] + w[1]), np.where(ok[0], rho[0], rho[1]))
-        fused_var = np.where(both, np.maximum(chi2, 1.0) / (w[0] + w[1]), np.where(ok[0], var[0], var[1]))
-    # the disagreement as a disparity: px at the nearest neighbour spacing of either line, f rho b
-    step = min(float(np.min(np.diff(r.row.positions))) for r in (a, b))
-    conflict = both & (np.abs(diff) * a.row.focal_px * step > limit) & (chi2 > 9.0)
-    good = (ok[0] | ok[1]) & ~conflict
-    with np.errstate(divide="ignore", invalid="ignore"):
-        depth = np.where(good, 1.0 / fused, np.nan)
-        depth_std = np.where(good, np.sqrt(fused_var) / fused**2, np.nan)
-    count = (ok[0].astype(np.uint8) + ok[1].astype(np.uint8)) * good
+        depth = scale / disparity.astype(np.float64)
+        depth_std = scale * std.astype(np.float64) / disparity.astype(np.float64) ** 2
+    good = np.isfinite(depth)
     edges = (a.edge_mask | b.edge_mask) & good
     return CalibratedGridDepth(
         depth=depth.astype(np.float32),
         depth_std=depth_std.astype(np.float32),
         edge_mask=edges,
-        line_count=count.astype(np.uint8),
+        line_count=np.where(good, count, 0).astype(np.uint8),
         conflict=conflict,
         row=a,
         column=b,

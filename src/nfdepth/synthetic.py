@@ -1198,6 +1198,8 @@ def calibrated_plane_row(cameras=None, *, depth=6.0, slope=0.15, noise_std=1.0, 
     for the default cameras at the default depth). ``cameras`` default
     :func:`example_calibrated_cameras`.
     """
+    from ._derotation import turn_rays
+
     cams = example_calibrated_cameras() if cameras is None else list(cameras)
     z0 = check_positive_finite("depth", depth)
     slope = check_finite("slope", slope)
@@ -1216,12 +1218,12 @@ def calibrated_plane_row(cameras=None, *, depth=6.0, slope=0.15, noise_std=1.0, 
     views, depths = [], []
     for cam in cams:
         xy = cam.rays()
-        ray = np.einsum("ij,hwj->hwi", cam.rotation, np.concatenate([xy, np.ones((*xy.shape[:2], 1))], axis=-1))
+        rx, ry, rz = turn_rays(cam.rotation, xy[..., 0], xy[..., 1])  # the pixel's ray in world axes
         c = cam.position
         with np.errstate(divide="ignore", invalid="ignore"):
-            s = (z0 + slope * c[0] - c[2]) / (ray[..., 2] - slope * ray[..., 0])
-        p = c + s[..., None] * ray
-        texture = 100.0 + 40.0 / np.sqrt(n / 2) * np.sin(ky * p[..., 1, None] + kx * p[..., 0, None] + phase).sum(-1)
+            s = (z0 + slope * c[0] - c[2]) / (rz - slope * rx)
+        px, py = c[0] + s * rx, c[1] + s * ry  # where it meets the plane
+        texture = 100.0 + 40.0 / np.sqrt(n / 2) * np.sin(ky * py[..., None] + kx * px[..., None] + phase).sum(-1)
         views.append((texture + noise_rng.normal(0.0, noise, s.shape)).astype(np.float32))
         depths.append(s)  # the ray's z in camera axes is 1: s is the depth along the optical axis
     return CalibratedRowScene(views=views, depths=depths, cameras=cams, reference_index=reference_index)

@@ -96,6 +96,11 @@ def _merged_reason(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_px: float = 0.5):
     """Fuse two disparity maps of one reference view (module docstring).
 
+    ``row``, ``column``: :class:`~nfdepth.stereo.StereoResult` or anything
+    with ``disparity``, ``uncertainty`` and ``reason`` maps in one unit
+    (:func:`nfdepth.rectify.calibrated_grid_depth` passes two calibrated
+    lines' inverse depths so).
+
     Returns ``(disparity, uncertainty, reason, axis_count, conflict)``:
     float32 maps with NaN where no value, uint8 reasons, the number of axes
     with a value, and the pixels refused for disagreeing.
