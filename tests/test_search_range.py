@@ -111,6 +111,33 @@ def test_a_periodic_texture_keeps_the_coarse_to_fine_result(monkeypatch):
     assert r.search_range_px[1] - r.search_range_px[0] < 16
 
 
+def test_a_wider_range_must_match_more_pixels_to_be_kept(monkeypatch):
+    """The widened range of the coarse search replaces the first only when it leaves at least
+    ``_RETRY_MIN_GAIN`` (1 %) of the textured pixels fewer unmatched: a smaller gain is aliasing or noise,
+    not a part of the scene the first range missed."""
+    views = _layers((120, 160), 6.0, 12.0, (30, 90, 50, 110))
+    first = static_stereo(views, reference=1)
+    real_search = stereo._search
+    monkeypatch.setattr(stereo, "_RETRY_SHARE", -1.0)  # search every time
+    monkeypatch.setattr(stereo, "_widen_by_coarse_search", lambda lo, hi, coarse: (lo, hi + 20.0))  # a wider range to retry
+    for gain, kept in ((0.5 * stereo._RETRY_MIN_GAIN, False), (stereo._RETRY_MIN_GAIN, True)):
+        shares = []
+
+        def search(*args, gain=gain, shares=shares, **kwargs):
+            out = real_search(*args, **kwargs)
+            shares.append(out[4])
+            if len(shares) == 2:  # the retry: as if it matched `gain` more of the textured pixels
+                out = (*out[:4], shares[0] - gain, *out[5:])
+            return out
+
+        monkeypatch.setattr(stereo, "_search", search)
+        r = static_stereo(views, reference=1)
+        assert len(shares) == 2
+        assert (r.search_range_px != first.search_range_px) is kept
+        if not kept:
+            np.testing.assert_array_equal(r.disparity, first.disparity)
+
+
 def test_an_explicit_range_reproduces_the_automatic_result():
     """``disparity_range_px`` set to the range the automatic search used gives the same maps
     without the pyramid (levels 1)."""
@@ -299,6 +326,40 @@ def test_cli_bad_disparity_range_before_reading_the_views(tmp_path, capsys):
     assert code == 2 and "--disparity-range must be two finite numbers MIN < MAX, got 9 1" in err
 
 
+def test_cli_depth_range(plane_files, tmp_path, capsys):
+    """`--depth-range NEAR FAR` with `--focal-px F --baseline B` searches the disparities F B / Z: 0.25..inf
+    scene units at F B = 10 is `--disparity-range 0 40`, bit for bit."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_pfm
+
+    scale = ["--focal-px", "100", "--baseline", "0.1"]
+    outputs = []
+    for k, extra in enumerate((["--depth-range", "0.25", "inf"], ["--disparity-range", "0", "40"])):
+        outputs.append(tmp_path / f"d{k}.pfm")
+        code = main(["stereo", *plane_files, *scale, *extra, "--out", str(outputs[-1])])
+        printed, err = capsys.readouterr()
+        assert code == 0, err
+        assert "searched 0..40 px" in printed
+    np.testing.assert_array_equal(read_pfm(outputs[0]), read_pfm(outputs[1]))
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--depth-range", "2", "1", "--focal-px", "100", "--baseline", "0.1"], "--depth-range must be two depths NEAR FAR with 0 < NEAR < FAR (FAR may be inf: no far limit), got 2 1"),
+        (["--depth-range", "1", "2"], "--depth-range needs --focal-px and --baseline (to turn the depths into disparities); or give --disparity-range"),
+        (["--depth-range", "1", "2", "--disparity-range", "0", "9", "--focal-px", "100", "--baseline", "0.1"], "--depth-range and --disparity-range both set the search range: give one"),
+    ],
+)
+def test_cli_bad_depth_range_before_reading_the_views(tmp_path, capsys, extra, message):
+    from nfdepth.cli import main
+
+    missing = [str(tmp_path / f"none{k}.png") for k in range(3)]
+    code = main(["stereo", *missing, *extra, "--out", str(tmp_path / "d.pfm")])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.strip() == f"nfdepth: error: {message}"
+
+
 def _rig_file(tmp_path, stereo_lines):
     path = tmp_path / "rig.toml"
     path.write_text("[camera]\nfocal_px = 100\nwidth_px = 80\nheight_px = 60\n[stereo]\nbaseline = 0.1\n" + stereo_lines)
@@ -330,6 +391,22 @@ def test_rig_disparity_range(plane_files, tmp_path, capsys):
     _, err = capsys.readouterr()
     assert code == 2 and not out.exists()
     assert err.strip() == "nfdepth: error: --disparity-range 0 32 contradicts the rig file's disparity_range_px = [0, 40]"
+
+
+def test_rig_disparity_range_and_a_depth_range(plane_files, tmp_path, capsys):
+    from nfdepth.cli import main
+
+    out = tmp_path / "d.pfm"
+    rig = _rig_file(tmp_path, "disparity_range_px = [0, 40]\n")
+    code = main(["stereo", *plane_files, "--rig", rig, "--depth-range", "0.5", "2", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and not out.exists()
+    assert err.strip() == "nfdepth: error: --depth-range and the rig file's disparity_range_px both set the search range: give one"
+    # a rig without a range: its focal length and baseline turn the depths into disparities
+    code = main(["stereo", *plane_files, "--rig", _rig_file(tmp_path, ""), "--depth-range", "0.25", "inf", "--out", str(out)])
+    printed, err = capsys.readouterr()
+    assert code == 0, err
+    assert "searched 0..40 px" in printed
 
 
 def test_rig_bad_disparity_range(plane_files, tmp_path, capsys):

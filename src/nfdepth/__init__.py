@@ -18,7 +18,8 @@ Depth solvers (eq. 4-6) and fusion
 Pipelines (sections 2.3, 3.2, 3.3)
     dynamic_stereo, static_stereo_edges, EdgeDepth
 Real images: coarse-to-fine multi-view static stereo, dense, uncertainty
-    static_stereo, StereoResult, fill_background; x and y baselines
+    static_stereo, StereoResult, fill_background,
+    disparity_range_for_depths; x and y baselines
     together: static_stereo_xy, XYStereoResult; a calibrated row of cameras
     that is not rectified: calibrated_row_depth, CalibratedCamera,
     load_cameras; a row and a column of them: calibrated_grid_depth
@@ -88,7 +89,7 @@ from .edges import EdgeSelection, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, normal_flow
 from .io import depth_to_points, read_image, read_pfm, write_array, write_colormap_png, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
-from .stereo import StereoResult, fill_background, static_stereo
+from .stereo import StereoResult, disparity_range_for_depths, fill_background, static_stereo
 from .xy_stereo import XYStereoResult, static_stereo_xy
 
 __version__ = "0.1.0"
@@ -185,6 +186,7 @@ __all__ = [
     "static_stereo",
     "static_stereo_xy",
     "fill_background",
+    "disparity_range_for_depths",
     "XYStereoResult",
     "StereoResult",
     "read_image",

@@ -16,16 +16,14 @@ _REFUSED = {
     "disparity_offset_px": "the rectified views share one principal point",
     "cx_px": "the cameras give the principal points",
     "cy_px": "the cameras give the principal points",
-    "disparity_range": "the rectified row's disparities are px per scene unit of position; leave the range to the pyramid",
-    "fill": "filling runs along the rectified row, not the reference's own pixels",
-    "fill_mask": "filling runs along the rectified row",
+    "disparity_range": "the rectified row's disparities are px per scene unit of position; give the depths to search with --depth-range NEAR FAR",
 }
 
 
 def run_calibrated_stereo(args, CLIError) -> int:
     """The ``--cameras`` branch of ``nfdepth stereo``: depth (scene units) in the reference camera's own pixels."""
     from ._cli_rig import write_figures
-    from .cli import _positive, _stereo_outputs
+    from .cli import _depth_range, _positive, _stereo_outputs
     from .io import (
         read_image,
         to_float32_map,
@@ -45,6 +43,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
     _positive("--cost-step-px", args.cost_step_px)
+    depth_range = _depth_range(args.depth_range)
     reference = len(args.views) // 2 if args.reference is None else args.reference
     if not 0 <= reference < len(args.views):
         raise CLIError(f"--reference must index one of the {len(args.views)} views (0..{len(args.views) - 1}), got {reference}")
@@ -66,7 +65,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
     column_cameras = load_cameras(args.column_cameras) if column else []
     if len(column_cameras) != len(column):
         raise CLIError(f"cameras '{args.column_cameras}' has {len(column_cameras)} [[camera]] tables for {len(column)} column views: expected one per view, in their order")
-    outputs, figures = _stereo_outputs(args, [*args.views, *column, args.cameras, args.column_cameras])  # (--fill-mask was refused above)
+    outputs, figures = _stereo_outputs(args, [*args.views, *column, args.cameras, args.column_cameras])
     views = [read_image(v) for v in args.views]
     column_views = [read_image(v) for v in column]
     for what, paths, imgs, cams, source in (("view", args.views, views, cameras, args.cameras), ("column view", column, column_views, column_cameras, args.column_cameras)):
@@ -76,7 +75,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
                     f"{what} {k} '{Path(path).name}' is {view.shape[1]}x{view.shape[0]} px, its camera (camera[{k}] of '{source}') "
                     f"{cam.width_px}x{cam.height_px}: expected the size the camera was calibrated at"
                 )
-    options = {"edges_only": args.edges_only}
+    options = {"edges_only": args.edges_only, "depth_range": depth_range}
     for key, name in (("sigma_px", "sigma_px"), ("levels", "levels"), ("threads", "threads"), ("cost_step_px", "cost_step_px")):
         value = getattr(args, key)
         if value is not None:
@@ -86,6 +85,12 @@ def run_calibrated_stereo(args, CLIError) -> int:
         line = res.row
     else:
         res = line = calibrated_row_depth(views, cameras, reference=reference, **options)
+    filled = None
+    if args.fill:  # along each line's rectified baseline (CalibratedRowDepth.filled); no std where filled
+        from dataclasses import replace
+
+        filled_depth, filled = res.filled()
+        res = replace(res, depth=filled_depth)
     hint = "give the cameras' positions in a unit that keeps depths in that range"
     depth = to_float32_map(res.depth, what="a depth", hint=hint)
     std = to_float32_map(res.depth_std, what="a standard deviation", hint=hint)
@@ -93,6 +98,9 @@ def run_calibrated_stereo(args, CLIError) -> int:
     k = 1
     if args.uncertainty:
         write_array(outputs[k], std, force=args.force)
+        k += 1
+    if args.fill_mask:
+        write_array(outputs[k], np.where(np.isfinite(depth), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)
         k += 1
     if args.preview:
         write_colormap_png(outputs[k], depth, force=args.force)
@@ -106,12 +114,14 @@ def run_calibrated_stereo(args, CLIError) -> int:
     finite = depth[valid]
     rng_txt = f"{np.min(finite):.3g}..{np.max(finite):.3g} scene units" if finite.size else "none"
     spacing = np.diff(line.row.positions)
-    fused = ""
+    notes = ""
+    if filled is not None:
+        notes += f", {int(np.count_nonzero(filled & valid))} filled"
     if column:
-        fused = f", fused with a column of {len(column_views)} cameras ({int(np.count_nonzero(res.line_count == 2))} pixels from both, {int(np.count_nonzero(res.conflict))} refused for disagreeing)"
+        notes += f", fused with a column of {len(column_views)} cameras ({int(np.count_nonzero(res.line_count == 2))} pixels from both, {int(np.count_nonzero(res.conflict))} refused for disagreeing)"
     print(
         f"depth for view {reference} ({name}), rectified row of {len(views)} cameras (spacing {np.min(spacing):.3g}..{np.max(spacing):.3g} scene units, "
-        f"farthest centre {np.max(line.row.off_line):.2g} off the line){fused}: {int(valid.sum())} of {valid.size} pixels ({100.0 * valid.mean():.1f} %), "
+        f"farthest centre {np.max(line.row.off_line):.2g} off the line){notes}: {int(valid.sum())} of {valid.size} pixels ({100.0 * valid.mean():.1f} %), "
         f"range {rng_txt}, {line.result.runtime_s:.2f} s, {line.result.levels} levels -> {outputs[0]}"
     )
     return 0

@@ -6,6 +6,7 @@ the parameter, what arrived and what was expected.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 
@@ -212,6 +213,19 @@ def check_reach(name: str, value) -> float:
 def check_positive_or_inf(name: str, value) -> float:
     """Return ``value`` as float, or raise if it is not a number > 0 (``inf`` allowed: no limit)."""
     return _check_number(name, value, "a number > 0 (inf: no limit)", lambda x: x > 0)
+
+
+def check_depth_range(name: str, value) -> tuple[float, float]:
+    """``(near, far)`` depths: two numbers with ``0 < near < far``, ``near`` finite, ``far`` finite or ``inf`` (no far limit)."""
+    expected = "two depths (near, far) with 0 < near < far (far may be inf: no far limit)"
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        msg = f"{name} must be {expected}, got {value!r}"
+        raise TypeError(msg)
+    near, far = (_check_number(name, v, expected, lambda x: True) for v in value)
+    if not (0 < near < far and math.isfinite(near)):
+        msg = f"{name} must be {expected}, got ({near:g}, {far:g})"
+        raise ValueError(msg)
+    return near, far
 
 
 #: Largest finite threshold, margin or regulariser accepted for an option that is

@@ -351,6 +351,16 @@ def _positive(name: str, value):
     return float(value)
 
 
+def _depth_range(value):
+    """``--depth-range NEAR FAR``, checked: ``0 < NEAR < FAR``, ``FAR`` may be inf; None if not given."""
+    if value is None:
+        return None
+    near, far = value
+    if not (np.isfinite(near) and 0 < near < far):
+        raise CLIError(f"--depth-range must be two depths NEAR FAR with 0 < NEAR < FAR (FAR may be inf: no far limit), got {near:g} {far:g}")
+    return float(near), float(far)
+
+
 def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     """``nfdepth stereo``'s output paths, checked before any work: ``[--out, --uncertainty, --fill-mask, --preview, --ply]`` (those given) and the figures."""
     from ._cli_rig import figure_outputs
@@ -375,7 +385,7 @@ def _stereo_outputs(args, inputs) -> tuple[list, dict]:
 
 def _cmd_stereo(args) -> int:
     from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
-    from .stereo import check_depth_scale, check_disparity_offset, static_stereo
+    from .stereo import check_depth_scale, check_disparity_offset, disparity_range_for_depths, static_stereo
 
     if len(args.views) < 2:
         raise CLIError(f"stereo needs at least 2 views (3 or more recommended), got {len(args.views)}")
@@ -434,6 +444,15 @@ def _cmd_stereo(args) -> int:
             raise CLIError(str(exc)) from None
     if offset != 0 and focal is None:
         raise CLIError("--disparity-offset-px changes depth only: give --focal-px and --baseline too (the disparity output is as measured)")
+    depth_range = _depth_range(args.depth_range)
+    if depth_range is not None:
+        if args.disparity_range is not None:
+            source = "the rig file's disparity_range_px" if rig is not None and opts.get("disparity_range_px") is not None else "--disparity-range"
+            raise CLIError(f"--depth-range and {source} both set the search range: give one")
+        if focal is None:
+            raise CLIError("--depth-range needs --focal-px and --baseline (to turn the depths into disparities); or give --disparity-range")
+        lo, hi = disparity_range_for_depths(depth_range, focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        args.disparity_range = [lo, hi]
     if offset != 0 and args.column:
         raise CLIError("--disparity-offset-px applies to one row: with --column the row and the column would each need their own offset")
     if principal_point_given and not args.ply:
@@ -675,6 +694,14 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         metavar=("MIN", "MAX"),
         help="disparities to search, px between neighbouring views (as StereoSGBM's range; default: found coarse to fine); skips the pyramid",
+    )
+    p.add_argument(
+        "--depth-range",
+        nargs=2,
+        type=float,
+        metavar=("NEAR", "FAR"),
+        help="depths to search, in the unit of --baseline or of the --cameras positions (FAR may be inf); "
+        "the disparity range they give (needs --focal-px and --baseline, or --cameras); skips the pyramid",
     )
     p.add_argument(
         "--cost-step-px",

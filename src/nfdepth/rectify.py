@@ -210,6 +210,27 @@ class RectifiedRow:
     camera: CalibratedCamera
     axis: str = "x"
 
+    def _turned_rays(self) -> np.ndarray:
+        """The reference camera's pixel rays ``(x, y, 1)`` in the rectified axes, shape (3, H, W)."""
+        rays = self.camera.rays()
+        return turn_rays(self.rotation.T @ self.camera.rotation, rays[..., 0], rays[..., 1])
+
+    def disparity_range(self, depth_range) -> tuple[float, float]:
+        """The search range (px per scene unit of position) of the depths ``(near, far)`` along the reference camera's axis.
+
+        A point at depth ``Z`` along the reference's axis lies at ``Z`` times
+        its ray's rectified ``z`` along the rectified axis; the range covers
+        that factor's extremes over the reference's image (within a few per
+        cent of 1 for cameras turned a few degrees). ``far`` may be inf.
+        """
+        from ._validate import check_depth_range
+
+        near, far = check_depth_range("depth_range", depth_range)
+        z = self._turned_rays()[2]
+        z = z[np.isfinite(z) & (z > 0)]
+        lo_z, hi_z = (float(np.min(z)), float(np.max(z))) if z.size else (1.0, 1.0)
+        return self.focal_px / (far * hi_z), self.focal_px / (near * lo_z)
+
     def to_reference(self, depth, *, std=None):
         """Depth along the rectified optical axis (the rectified reference's pixels) -> depth along the reference camera's, in its own pixels.
 
@@ -218,8 +239,7 @@ class RectifiedRow:
         depth's standard deviation, is scaled alike. Returns ``depth`` or
         ``(depth, std)``.
         """
-        rays = self.camera.rays()
-        turned = turn_rays(self.rotation.T @ self.camera.rotation, rays[..., 0], rays[..., 1])
+        turned = self._turned_rays()
         h, w = np.asarray(depth).shape
         with np.errstate(divide="ignore", invalid="ignore"):
             col = np.rint(self.cx_px + self.focal_px * turned[0] / turned[2])
@@ -386,17 +406,42 @@ class CalibratedRowDepth:
 
     ``depth``, ``depth_std``: along the reference camera's optical axis, in
     its own pixels, scene units, NaN where unknown; ``edge_mask``: the
-    rectified reference's edge points read back the same way; ``row``: the
+    rectified reference's edge points read back the same way;
+    ``disparity``: the rectified reference's disparity behind ``depth``
+    (px per scene unit of position; NaN where ``depth`` has no value:
+    unknown, or seen by no other view); ``row``: the
     :class:`RectifiedRow`; ``result``: static stereo's
-    :class:`nfdepth.stereo.StereoResult` on it (disparity per scene unit of
-    position, in the rectified reference's pixels).
+    :class:`nfdepth.stereo.StereoResult` on it (as ``disparity``, before
+    that last test).
     """
 
     depth: np.ndarray
     depth_std: np.ndarray
     edge_mask: np.ndarray
+    disparity: np.ndarray
     row: RectifiedRow
     result: object
+
+    def filled(self) -> tuple[np.ndarray, np.ndarray]:
+        """The depth with its holes filled from the background, and where it was filled.
+
+        :func:`nfdepth.stereo.fill_background` on ``disparity``, along the
+        rectified row (the baseline, where occluded strips lie), read back
+        into the reference's pixels as ``depth`` is. The filled values are no
+        measurements: ``depth_std`` has none there, and the returned mask
+        marks them. Returns float32 depth (NaN where the rectified line has
+        no value at all or the reference's pixel lies off the rectified
+        canvas) and the bool mask of filled pixels.
+        """
+        from .stereo import fill_background
+
+        d, _ = fill_background(self.disparity, axis=self.row.axis)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(d > 0, self.row.focal_px / d.astype(np.float64), np.nan)
+        depth = self.row.to_reference(z)
+        measured = np.isfinite(self.depth)
+        depth = np.where(measured, self.depth, depth).astype(np.float32)
+        return depth, ~measured & np.isfinite(depth)
 
     def points(self, *, image=None):
         """The depth as 3-D points in the reference camera's axes (lens distortion undone), as :func:`nfdepth.io.depth_to_points`.
@@ -421,7 +466,7 @@ def _depth_points(camera: CalibratedCamera, depth, image):
     return pts, point_colors(image, rows, cols, depth.shape)
 
 
-def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) -> CalibratedRowDepth:
+def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **stereo_options) -> CalibratedRowDepth:
     """Depth in the reference camera's pixels from a calibrated, unrectified row of views.
 
     :func:`rectify_row`, then :func:`nfdepth.stereo.static_stereo` on the
@@ -429,16 +474,27 @@ def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) ->
     scene unit, depth ``focal_px / d``), then the depth read back
     (:meth:`RectifiedRow.to_reference`). Pixels where the rectified reference
     does not see its own image are NaN, and so are those whose match lies
-    outside every other view. ``stereo_options`` go to static stereo (not
-    ``positions``, ``axis`` or ``reference``).
+    outside every other view. ``depth_range``, ``(near, far)`` in scene
+    units along the reference camera's axis (``far`` may be inf), is the
+    search range instead of the pyramid's (:meth:`RectifiedRow.disparity_range`,
+    static stereo's ``disparity_range_px``). ``stereo_options`` go to static
+    stereo (not ``positions``, ``axis`` or ``reference``).
     """
+    from ._validate import check_depth_range
     from .stereo import static_stereo
 
     clash = sorted(set(stereo_options) & {"positions", "axis"})
     if clash:
         msg = f"calibrated_row_depth sets {', '.join(clash)} from the cameras: do not pass {' or '.join(clash)}"
         raise TypeError(msg)
+    if depth_range is not None:
+        if "disparity_range_px" in stereo_options:
+            msg = "give depth_range or disparity_range_px, not both (depth_range sets the disparities to search)"
+            raise TypeError(msg)
+        depth_range = check_depth_range("depth_range", depth_range)
     row = rectify_row(views, cameras, reference=reference)
+    if depth_range is not None:
+        stereo_options["disparity_range_px"] = row.disparity_range(depth_range)
     res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
     d = np.asarray(res.disparity, dtype=np.float64)
     h, w = d.shape
@@ -460,7 +516,9 @@ def calibrated_row_depth(views, cameras, *, reference: int, **stereo_options) ->
         z_std = np.where(usable, row.focal_px * np.asarray(res.uncertainty, dtype=np.float64) / d**2, np.nan)
     depth, depth_std = row.to_reference(z, std=z_std)
     edges = row.to_reference(np.where(res.edge_mask & usable, 1.0, np.nan))
-    return CalibratedRowDepth(depth=depth, depth_std=depth_std, edge_mask=np.isfinite(edges) & np.isfinite(depth), row=row, result=res)
+    return CalibratedRowDepth(
+        depth=depth, depth_std=depth_std, edge_mask=np.isfinite(edges) & np.isfinite(depth), disparity=np.where(usable, d, np.nan).astype(np.float32), row=row, result=res
+    )
 
 
 # ----------------------------------------------------------------- files
@@ -628,9 +686,32 @@ class CalibratedGridDepth:
         """The fused depth as 3-D points in the reference camera's axes (:meth:`CalibratedRowDepth.points`)."""
         return _depth_points(self.row.row.camera, self.depth, image)
 
+    def filled(self) -> tuple[np.ndarray, np.ndarray]:
+        """The fused depth with its holes filled from the background, and where it was filled.
+
+        A pixel neither line measured (or whose two values conflict) takes the
+        farther of the row's and the column's filled depths
+        (:meth:`CalibratedRowDepth.filled`, each along its own baseline).
+        ``depth_std`` has no value there; the mask marks them.
+        """
+        row, _ = self.row.filled()
+        column, _ = self.column.filled()
+        measured = np.isfinite(self.depth)
+        depth = np.where(measured, self.depth, np.fmax(row, column)).astype(np.float32)
+        return depth, ~measured & np.isfinite(depth)
+
 
 def calibrated_grid_depth(
-    row_views, row_cameras, column_views, column_cameras, *, row_reference: int, column_reference: int, max_line_disagreement_px: float = 0.5, **stereo_options
+    row_views,
+    row_cameras,
+    column_views,
+    column_cameras,
+    *,
+    row_reference: int,
+    column_reference: int,
+    max_line_disagreement_px: float = 0.5,
+    depth_range=None,
+    **stereo_options,
 ) -> CalibratedGridDepth:
     """Depth from two lines of calibrated cameras through the same reference camera, fused per pixel.
 
@@ -642,7 +723,9 @@ def calibrated_grid_depth(
     :func:`nfdepth.xy_stereo.fuse_axes` does for rectified rows); a pixel
     whose two values differ by more than ``max_line_disagreement_px`` px of
     disparity at the nearest neighbour spacing and by more than 3 standard
-    deviations is NaN (``conflict``).
+    deviations is NaN (``conflict``). ``depth_range`` and ``stereo_options``
+    go to each line's :func:`calibrated_row_depth` (the depths are the
+    reference camera's, so one range serves both lines).
 
     Raises
     ------
@@ -665,8 +748,8 @@ def calibrated_grid_depth(
     if not np.array_equal(np.asarray(row_views[row_reference]), np.asarray(column_views[column_reference])):
         msg = "the row's and the column's reference views must be the same image: both lines pass through the reference camera"
         raise ValueError(msg)
-    a = calibrated_row_depth(row_views, row_cameras, reference=row_reference, **stereo_options)
-    b = calibrated_row_depth(column_views, column_cameras, reference=column_reference, **stereo_options)
+    a = calibrated_row_depth(row_views, row_cameras, reference=row_reference, depth_range=depth_range, **stereo_options)
+    b = calibrated_row_depth(column_views, column_cameras, reference=column_reference, depth_range=depth_range, **stereo_options)
     # each line's inverse depth as a disparity in px at the nearest neighbour spacing of either line
     # (f rho b: the unit of max_line_disagreement_px), fused as two rectified axes are
     scale = a.row.focal_px * min(float(np.min(np.diff(r.row.positions))) for r in (a, b))
