@@ -328,6 +328,12 @@ def _cmd_video(args) -> int:
         options["threads"] = args.threads
     if args.dense:
         options["dense"] = True
+    if args.dense_frames_before is not None:
+        if not args.dense:
+            raise CLIError("--dense-frames-before goes with --dense (the frames of each dense map)")
+        if args.dense_frames_before < 1:
+            raise CLIError(f"--dense-frames-before must be an integer >= 1 (1: the triple), got {args.dense_frames_before}")
+        options["dense_frames_before"] = args.dense_frames_before
     figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
@@ -425,6 +431,13 @@ def register(sub, CLIError) -> None:
         action="store_true",
         help="also a dense depth map of every frame's triple (rectified static stereo; not fused over time): arrays dense_depth,"
         " dense_depth_std in OUT.npz, or dense_depth_NNNNNN.tif, dense_depth_std_NNNNNN.tif in a folder",
+    )
+    p.add_argument(
+        "--dense-frames-before",
+        type=int,
+        metavar="N",
+        help="with --dense: frames before each frame that its dense map uses (default 1: the triple); more for a camera that moves"
+        " little per frame (a longer row, at no delay)",
     )
     p.add_argument("--threads", type=int, metavar="N", help="with --dense: threads of the cost volume (default: all cores, as OpenCV)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -1,4 +1,4 @@
-"""Dense depth of a video triple: its three frames rectified into a row of static-stereo views.
+"""Dense depth of a video triple (or a longer row of frames): its frames rectified into a row of static-stereo views.
 
 A triple of a camera translating through a still scene is static stereo
 (paper section 2.3), and :func:`nfdepth.stereo.static_stereo` gives a dense
@@ -24,6 +24,11 @@ ahead (path within :data:`MIN_SIDEWAYS_DEG` of the optical axis) none do:
 epipolar lines radiate from the focus of expansion, which no row of views
 reproduces. The edge points (eq. 4, any direction of motion) are measured
 as before.
+
+A longer row (``dense_frames_before`` of :func:`nfdepth.video.depth_from_video`:
+frames ``k - N .. k + 1``) is rectified the same way, with the path from
+its first frame to its last, for a camera that moves little per frame:
+static stereo's precision follows the farthest view.
 
 The views go to static stereo in their order along the path, whatever
 their order in time: a camera that reverses within the triple (the middle
@@ -57,18 +62,19 @@ _SAME_PLACE = 1e-6
 
 
 @dataclass(frozen=True)
-class DenseTriple:
-    """Dense inverse depth of a triple's middle frame.
+class DenseRow:
+    """Dense inverse depth of the middle frame of a row of frames (:func:`dense_row`).
 
     ``rho`` and ``rho_std`` (H x W float64, pixel-centred, NaN where
     unknown); ``covered``: the fraction of the middle frame's pixels the
     rectified canvas holds (1 unless the path points near the optical
-    axis); ``off_line``: how far the middle position lies off the line
-    through the outer two, relative to half their distance;
-    ``off_line_ahead``: the part of that along the rectified optical axis
-    (it changes the middle view's scale; the rest, across the path in the
-    image plane, misaligns the rectified views vertically). 0 without a
-    rectification.
+    axis); ``off_line``: how far the frames' positions lie off the line
+    through the first and last, the farthest of them, relative to the
+    mean step along it (for a triple: the middle one, relative to half
+    the outer two's distance); ``off_line_ahead``: the part of that along
+    the rectified optical axis (it changes a view's scale; the rest,
+    across the path in the image plane, misaligns the rectified views
+    vertically). 0 without a rectification.
     """
 
     rho: np.ndarray
@@ -129,32 +135,40 @@ def _static_stereo(views, reference, positions, noise_std, threads):
         return static_stereo(views, reference=reference, positions=positions, noise_std=noise_std, threads=threads)
 
 
-def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_std: float, threads: int | None = None) -> DenseTriple:
-    """Dense inverse depth (and its std) of the middle frame of a triple (module docstring).
+def dense_row(frames, camera: PinholeCamera, rotations, positions, *, middle: int, noise_std: float, threads: int | None = None) -> DenseRow:
+    """Dense inverse depth (and its std) of frame ``middle`` of a row of frames taken along a path (module docstring).
 
-    ``rotations``: the three camera-to-world matrices; ``positions``: the
-    three optical centres (world). ``noise_std`` is the image noise of the
-    frames as taken (resampling smooths it away); ``threads`` as
-    :func:`nfdepth.stereo.static_stereo`, whose pyramid depth follows the
-    canvas size.
+    ``frames`` in the order taken (a triple, or more frames before the
+    middle one: a longer row, :func:`nfdepth.video.depth_from_video`'s
+    ``dense_frames_before``); ``rotations``: their camera-to-world
+    matrices; ``positions``: their optical centres (world). The path runs
+    from the first frame's position to the last's. ``noise_std`` is the
+    image noise of the frames as taken (resampling smooths it away);
+    ``threads`` as :func:`nfdepth.stereo.static_stereo`, whose pyramid
+    depth follows the canvas size.
     """
     h, w = camera.shape
     nan = np.full((h, w), np.nan)
-    p0, p1, p2 = (np.asarray(p, dtype=float) for p in positions)
-    path = p2 - p0
+    pos = [np.asarray(p, dtype=float) for p in positions]
+    n = len(pos)
+    path = pos[-1] - pos[0]
     length = float(np.linalg.norm(path))
     along = path / length
-    s1 = float(along @ (p1 - p0))
-    offset = p1 - p0 - s1 * along
-    off_line = float(np.linalg.norm(offset)) / (length / 2.0)
-    rect = rectifying_orientation(rotations[1], path)
+    along_path = [0.0, *(float(along @ (p - pos[0])) for p in pos[1:-1]), length]
+    offsets = [p - pos[0] - a * along for p, a in zip(pos, along_path)]
+    step = length / (n - 1)  # the mean step along the path
+    off_line = max(float(np.linalg.norm(o)) for o in offsets) / step
+    rect = rectifying_orientation(rotations[middle], path)
     if rect is None:
-        return DenseTriple(nan, nan.copy(), 0.0, off_line)
-    off_ahead = abs(float(rect[:, 2] @ offset)) / (length / 2.0)
-    # the views in their order along the path; an outer one where the middle one is adds nothing
-    along_path = [0.0, s1, length]
-    order = sorted((j for j in range(3) if j == 1 or abs(along_path[j] - s1) > _SAME_PLACE * length), key=along_path.__getitem__)
-    to_rect = rect.T @ np.asarray(rotations[1], dtype=float)  # a middle-frame ray in rectified axes
+        return DenseRow(nan, nan.copy(), 0.0, off_line)
+    off_ahead = max(abs(float(rect[:, 2] @ o)) for o in offsets) / step
+    # the views in their order along the path; a frame where the middle one (or an earlier kept one) is adds nothing
+    order = [middle]
+    for j in range(n):
+        if j != middle and all(abs(along_path[j] - along_path[i]) > _SAME_PLACE * length for i in order):
+            order.append(j)
+    order.sort(key=along_path.__getitem__)
+    to_rect = rect.T @ np.asarray(rotations[middle], dtype=float)  # a middle-frame ray in rectified axes
     grid = _canvas(camera, to_rect)
     as_taken = grid == (h, w, camera.cx_px, camera.cy_px)
     views, seen = [], None
@@ -166,11 +180,9 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
             continue
         maps = derotation_maps(camera, turn, grid=grid)
         views.append(derotate(frame, maps))
-        if j == 1:
+        if j == middle:
             seen = maps[2]
-    positions = [along_path[j] for j in order]
-    reference = order.index(1)
-    res = _static_stereo(views, reference, positions, noise_std, threads)
+    res = _static_stereo(views, order.index(middle), [along_path[j] for j in order], noise_std, threads)
     f = camera.focal_px
     rho_rect = res.disparity.astype(np.float64) / f  # px per unit of position = f / Z
     std_rect = res.uncertainty.astype(np.float64) / f
@@ -187,4 +199,4 @@ def dense_triple(frames, camera: PinholeCamera, rotations, positions, *, noise_s
     rho[on] = rho_rect[rr, cc] * ray[2][on]
     std[on] = std_rect[rr, cc] * ray[2][on]
     std[np.isnan(rho)] = np.nan
-    return DenseTriple(rho, std, float(on.mean()), off_line, off_ahead)
+    return DenseRow(rho, std, float(on.mean()), off_line, off_ahead)

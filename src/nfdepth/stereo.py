@@ -1906,7 +1906,6 @@ def static_stereo(
         for _ in range(0 if skip else iterations_per_level):
             m = _measure(sub_sm, sub_t, sub_ref, d, floor=4.0 * s_c**2, window_px=select_window_px, reference=reference_nodes)
             info = m.grad_col**2 * m.s_tt  # intensity^2/px^2 * position^2
-            num = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px)
             den = _blur(info, dense_window_px)
             den2 = _blur(info, dense_window_px / np.sqrt(2.0))  # sum K^2 w up to a constant
             # model error: local reduced chi^2 of the LS residuals (>= 3 views)
@@ -1920,7 +1919,7 @@ def static_stereo(
                 if aggregation == "guided":
                     delta = _weighted_guided(guide[level], info, m.grad_col * m.slope * m.s_tt, guided_radius, guided_eps)
                 else:
-                    delta = num / den
+                    delta = _blur(m.grad_col * m.slope * m.s_tt, dense_window_px) / den
                 # var of sum K w delta / sum K w for correlated cells; den2 / den >= 1
                 # guards windows whose information sits only in the tails
                 v_new = s_c**2 * red * corr_area * k2 * np.maximum(den2 / den, 1.0) / den

@@ -91,7 +91,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._dense_video import MIN_SIDEWAYS_DEG, dense_triple
+from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
@@ -591,7 +591,8 @@ def _camera_rotation(spec: VideoSpec, frame: int) -> np.ndarray:
 #: (with ``dense``: also one whose rectified canvas holds less than this fraction of it).
 _LEAST_SEEN = 0.5
 #: With ``dense``: a middle position further than this (relative to half the outer two's distance)
-#: from the line through the outer two is reported.
+#: from the line through the outer two is reported (with ``dense_frames_before`` > 1: any position of
+#: the dense map's frames, relative to their mean step, from the line through the first and last).
 _MAX_OFF_LINE = 0.02
 
 
@@ -660,6 +661,7 @@ def depth_from_video(
     max_residual_px: float = 1.0,
     edge_step_px: float = 1.0,
     dense: bool = False,
+    dense_frames_before: int = 1,
     threads: int | None = None,
 ) -> Iterator[VideoDepthFrame]:
     """Depth per frame of a camera moving (translating, and turning if its poses say so) through a static scene, fused over time.
@@ -725,6 +727,13 @@ def depth_from_video(
         :func:`nfdepth.stereo.static_stereo` (:mod:`nfdepth._dense_video`;
         about 0.1-0.2 s a 640 x 480 frame). A camera moving within 5
         degrees of its optical axis gets none (NaN maps and a warning).
+    dense_frames_before : int
+        With ``dense``: frames before the middle one that its dense map
+        uses (1: the triple). More make a longer row along the path,
+        reaching further back, for a camera that moves little per frame
+        (its precision follows the farthest view), at no delay: frame
+        ``k``'s map still comes when frame ``k + 1`` arrives. The first
+        frames use what came before them.
     threads : int, optional
         Threads of the dense map's cost volume (as ``static_stereo``).
 
@@ -789,6 +798,10 @@ def depth_from_video(
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)
     dense = check_bool("dense", dense)
+    dense_frames_before = check_int("dense_frames_before", dense_frames_before, 1)
+    if dense_frames_before > 1 and not dense:
+        msg = f"dense_frames_before = {dense_frames_before} is for the dense maps: give dense=True too"
+        raise ValueError(msg)
     if threads is not None:
         threads = check_int("threads", threads, 1)
     if max_residual_px > _DIFFERENTIAL_RANGE_PX:
@@ -801,6 +814,7 @@ def depth_from_video(
     motion_name = _spec_name(spec, rig)
     lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
+    history: list[np.ndarray] = []  # dense: the last dense_frames_before + 2 frames
     state: _State | None = None
     prev_pos = prev_orientation = prev_rotation = None
     moved = False
@@ -832,6 +846,10 @@ def depth_from_video(
         if rig is not None and camera is None and any(rig.distortion):
             img = rig.undistort(img)
         window.append(img)
+        if dense:
+            history.append(img)
+            if len(history) > dense_frames_before + 2:
+                history.pop(0)
         if len(window) < 3:
             continue
         if len(window) > 3:
@@ -925,7 +943,17 @@ def depth_from_video(
             rho_m[ii, jj] = rho
             var_m[ii, jj] = std**2
             if dense:
-                dt = dense_triple(window, cam, rotations, (p_prev, p_mid, p_next), noise_std=edge_options["noise_std"], threads=threads)
+                back = len(history) - 2  # frames before the middle one
+                row = range(k - back, k + 2)
+                dt = dense_row(
+                    history,
+                    cam,
+                    [*(_camera_rotation(spec, i) for i in row[:-3]), *rotations],
+                    [*(_position(spec, i, motion_name, rig) for i in row[:-3]), p_prev, p_mid, p_next],
+                    middle=back,
+                    noise_std=edge_options["noise_std"],
+                    threads=threads,
+                )
                 known = dt.rho[np.isfinite(dt.rho) & (dt.rho != 0)]
                 to_float32_map(known, what="an inverse depth", hint=_UNITS_HINT)
                 to_float32_map(1.0 / known, what="a depth", hint=_UNITS_HINT)
@@ -1032,7 +1060,12 @@ def depth_from_video(
         warnings.warn(
             f"in {len(bent_frames)} of {triples} frames ({_frame_list(bent_frames)}) the middle position lies up to"
             f" {100 * bent:.0f} % of the step off the line through its neighbours' positions: their dense maps take it as on"
-            f" that line ({_off_line_effect(bent, bent_ahead)})",
+            f" that line ({_off_line_effect(bent, bent_ahead)})"
+            if dense_frames_before == 1
+            else f"in {len(bent_frames)} of {triples} frames ({_frame_list(bent_frames)}) the positions of a dense map's"
+            f" {dense_frames_before + 2} frames lie up to {100 * bent:.0f} % of the mean step off the line through the first"
+            f" and last of them: the dense maps take them as on that line ({_off_line_effect(bent, bent_ahead)});"
+            " fewer frames (dense_frames_before) follow a curved path better",
             UserWarning,
             stacklevel=2,
         )
