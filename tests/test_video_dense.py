@@ -207,16 +207,22 @@ def test_dense_maps_are_written(tmp_path):
     assert [p.name for p in paths] == ["depth_000001.tif", "depth_std_000001.tif", "dense_depth_000001.tif", "dense_depth_std_000001.tif"]
 
 
-def test_cli_dense(tmp_path, capsys):
-    frames, depths, _, _ = _film((1.0, 0.0, 0.0), (0.0, 0.0, 0.0), n_frames=4)
+def _video_files(tmp_path, frames, step_x):
+    """The frames as TIFFs in a folder and a rig file of ``CAMERA`` moving ``step_x`` along X per frame."""
     import imageio.v3 as iio
 
     folder = tmp_path / "frames"
     folder.mkdir()
     for k, f in enumerate(frames):
-        iio.imwrite(folder / f"f{k}.tif", f)
+        iio.imwrite(folder / f"f{k:02d}.tif", f)
     rig = tmp_path / "rig.toml"
-    rig.write_text("[camera]\nfocal_px = 100.0\nwidth_px = 160\nheight_px = 120\n\n[video]\nvelocity = [1.0, 0.0, 0.0]\n")
+    rig.write_text(f"[camera]\nfocal_px = 100.0\nwidth_px = 160\nheight_px = 120\n\n[video]\nvelocity = [{step_x!r}, 0.0, 0.0]\n")
+    return folder, rig
+
+
+def test_cli_dense(tmp_path, capsys):
+    frames, depths, _, _ = _film((1.0, 0.0, 0.0), (0.0, 0.0, 0.0), n_frames=4)
+    folder, rig = _video_files(tmp_path, frames, 1.0)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="no edge points")
         assert main(["video", str(folder), "--rig", str(rig), "--out", str(tmp_path / "v.npz"), "--dense", "--threads", "1", "--quiet"]) == 0
@@ -296,15 +302,8 @@ def test_dense_frames_before_errors(options, exc, message):
 
 
 def test_cli_dense_frames_before(tmp_path, capsys):
-    import imageio.v3 as iio
-
     frames, _, positions, orientations = _slow_film((0.15, 0.0, 0.0), n_frames=6)
-    folder = tmp_path / "frames"
-    folder.mkdir()
-    for k, f in enumerate(frames):
-        iio.imwrite(folder / f"f{k:02d}.tif", f)
-    rig = tmp_path / "rig.toml"
-    rig.write_text("[camera]\nfocal_px = 100.0\nwidth_px = 160\nheight_px = 120\n\n[video]\nvelocity = [0.15, 0.0, 0.0]\n")
+    folder, rig = _video_files(tmp_path, frames, 0.15)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="no edge points")
         assert main(["video", str(folder), "--rig", str(rig), "--out", str(tmp_path / "v.npz"), "--dense", "--dense-frames-before", "3", "--threads", "1", "--quiet"]) == 0

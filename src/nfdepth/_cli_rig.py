@@ -320,20 +320,18 @@ def _cmd_video(args) -> int:
     options = _check_sigma(args, CLIError)
     if args.levels is not None:
         options["levels"] = args.levels
-    if args.threads is not None:
+    # the dense maps' options: (flag, what it is for, what 1 means)
+    for key, flag, what, one in (("threads", "--threads", "the dense maps' cost volume", ""), ("dense_frames_before", "--dense-frames-before", "the frames of each dense map", " (1: the triple)")):
+        value = getattr(args, key)
+        if value is None:
+            continue
         if not args.dense:
-            raise CLIError("--threads goes with --dense (the dense maps' cost volume)")
-        if args.threads < 1:
-            raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")
-        options["threads"] = args.threads
+            raise CLIError(f"{flag} goes with --dense ({what})")
+        if value < 1:
+            raise CLIError(f"{flag} must be an integer >= 1{one}, got {value}")
+        options[key] = value
     if args.dense:
         options["dense"] = True
-    if args.dense_frames_before is not None:
-        if not args.dense:
-            raise CLIError("--dense-frames-before goes with --dense (the frames of each dense map)")
-        if args.dense_frames_before < 1:
-            raise CLIError(f"--dense-frames-before must be an integer >= 1 (1: the triple), got {args.dense_frames_before}")
-        options["dense_frames_before"] = args.dense_frames_before
     figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
