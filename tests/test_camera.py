@@ -32,6 +32,15 @@ def test_project_back_project_round_trip(camera):
     np.testing.assert_allclose(back, pts, rtol=1e-12, atol=1e-9)  # float64 round trip
 
 
+def test_intrinsic_matrix_projects_as_the_camera_does():
+    cam = PinholeCamera(focal_px=400.0, width_px=200, height_px=160, cx_px=97.0, cy_px=83.5)
+    np.testing.assert_array_equal(cam.matrix, [[400.0, 0.0, 97.0], [0.0, 400.0, 83.5], [0.0, 0.0, 1.0]])
+    pts = np.array([[0.3, -0.2, 5.0], [-1.0, 0.5, 2.0]])
+    uvw = pts @ cam.matrix.T
+    rows, cols, _ = cam.project(pts)
+    np.testing.assert_allclose(uvw[:, :2] / uvw[:, 2:], np.stack([cols, rows], axis=1), rtol=1e-12)
+
+
 def test_pure_translation_flow_matches_eq1_by_hand():
     # x=0.1, y=-0.2, Z=4, V=(1,2,3): u = (1 - 0.1*3)/4, v = (2 + 0.2*3)/4
     u, v = image_flow(0.1, -0.2, 0.25, RigidMotion(translation=(1, 2, 3)))

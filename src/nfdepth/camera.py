@@ -133,6 +133,11 @@ class PinholeCamera:
         """Image shape ``(rows, cols)``."""
         return (int(self.height_px), int(self.width_px))
 
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 3 x 3 intrinsic matrix ``K`` (OpenCV's camera matrix: ``(col, row, 1) ~ K (X, Y, Z)``)."""
+        return np.array([[self.focal_px, 0.0, self.cx_px], [0.0, self.focal_px, self.cy_px], [0.0, 0.0, 1.0]])
+
     def to_normalized(self, rows, cols):
         """Pixel ``(row, col)`` to normalised image coordinates ``(x, y)``."""
         x = (np.asarray(cols, dtype=float) - self.cx_px) / self.focal_px

@@ -516,8 +516,7 @@ class Rig:
         maps = self.__dict__.get("_undistort_maps")
         if maps is None:
             cam = self.camera
-            k = np.array([[cam.focal_px, 0.0, cam.cx_px], [0.0, cam.focal_px, cam.cy_px], [0.0, 0.0, 1.0]])
-            map_x, map_y = cv2.initUndistortRectifyMap(k, np.array(self.distortion), None, k, (cam.width_px, cam.height_px), cv2.CV_32FC1)
+            map_x, map_y = cv2.initUndistortRectifyMap(cam.matrix, np.array(self.distortion), None, cam.matrix, (cam.width_px, cam.height_px), cv2.CV_32FC1)
             maps = (map_x, map_y, None)
             object.__setattr__(self, "_undistort_maps", maps)  # a rig is immutable: computed once
         from ._derotation import derotate
