@@ -1496,7 +1496,7 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
             f"search match uniquely, against {100.0 * given_share:.0f} % as given. Scene points must shift toward "
             f"-{'col' if axis == 'x' else 'row'} from the first view to the last (the camera moving toward +X / +Y)"
         )
-    return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range), or the views are not rectified along the baseline"
+    return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range, or the depths: --depth-range), or the views are not rectified along the baseline"
 
 
 def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, shift_px, spread, textured, min_cost_margin):
