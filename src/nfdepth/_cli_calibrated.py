@@ -23,7 +23,7 @@ _REFUSED = {
 def run_calibrated_stereo(args, CLIError) -> int:
     """The ``--cameras`` branch of ``nfdepth stereo``: depth (scene units) in the reference camera's own pixels."""
     from ._cli_rig import write_figures
-    from .cli import _depth_range, _positive, _stereo_outputs
+    from .cli import _depth_range, _exposure_note, _positive, _stereo_outputs
     from .io import (
         read_image,
         to_float32_map,
@@ -76,6 +76,8 @@ def run_calibrated_stereo(args, CLIError) -> int:
                     f"{cam.width_px}x{cam.height_px}: expected the size the camera was calibrated at"
                 )
     options = {"edges_only": args.edges_only, "depth_range": depth_range}
+    if args.no_match_exposure:
+        options["match_exposure"] = False
     for key, name in (("sigma_px", "sigma_px"), ("levels", "levels"), ("threads", "threads"), ("cost_step_px", "cost_step_px")):
         value = getattr(args, key)
         if value is not None:
@@ -117,6 +119,8 @@ def run_calibrated_stereo(args, CLIError) -> int:
     notes = ""
     if filled is not None:
         notes += f", {int(np.count_nonzero(filled & valid))} filled"
+    lines = [("", line, args.views)] + ([("column ", res.column, column)] if column else [])
+    notes += _exposure_note([(label, ln.result, [paths[j] for j in ln.row.order]) for label, ln, paths in lines])
     if column:
         notes += f", fused with a column of {len(column_views)} cameras ({int(np.count_nonzero(res.line_count == 2))} pixels from both, {int(np.count_nonzero(res.conflict))} refused for disagreeing)"
     print(

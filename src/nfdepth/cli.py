@@ -361,6 +361,19 @@ def _depth_range(value):
     return float(near), float(far)
 
 
+def _exposure_note(results) -> str:
+    """``", exposure matched to the reference (...)"`` for the views whose exposure static stereo undid (``StereoResult.exposure``), or ``""``.
+
+    ``results``: ``(label, result, names)``, ``names`` the files of the result's views in its order.
+    """
+    parts = []
+    for label, result, names in results:
+        for fit, name in zip(result.exposure or (), names):
+            if fit is not None:
+                parts.append(f"{label}{Path(name).name} gain {fit[0]:.3g} offset {fit[1]:+.3g}")
+    return f", exposure matched to the reference ({'; '.join(parts)})" if parts else ""
+
+
 def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     """``nfdepth stereo``'s output paths, checked before any work: ``[--out, --uncertainty, --fill-mask, --preview, --ply]`` (those given) and the figures."""
     from ._cli_rig import figure_outputs
@@ -521,6 +534,8 @@ def _cmd_stereo(args) -> int:
         options["disparity_range_px"] = tuple(args.disparity_range)
     if cost_step is not None:
         options["cost_step_px"] = cost_step
+    if args.no_match_exposure:
+        options["match_exposure"] = False
     if column:
         from .xy_stereo import static_stereo_xy
 
@@ -591,6 +606,9 @@ def _cmd_stereo(args) -> int:
     if column:
         both = int(np.count_nonzero(valid & (result.axis_count == 2)))
         notes += f", row and column fused ({both} pixels from both)"
+        notes += _exposure_note([("row ", result.row, args.views), ("column ", result.column, column)])
+    else:
+        notes += _exposure_note([("", result, args.views)])
     print(
         f"{kind} for view {reference} ({Path(args.views[reference]).name}): {int(valid.sum())} of {valid.size} pixels"
         f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels{notes} -> {outputs[0]}"
@@ -711,6 +729,11 @@ def build_parser() -> argparse.ArgumentParser:
         "at 640x480, same edge precision, coarser dense values (README: 'Faster, with coarser candidates')",
     )
     p.add_argument("--threads", type=int, metavar="N", help="threads of the cost volume (default: all cores, as OpenCV; the result does not depend on it)")
+    p.add_argument(
+        "--no-match-exposure",
+        action="store_true",
+        help="take the views' intensities as they are (default: a view whose exposure differs from the reference's is mapped onto it first)",
+    )
     p.add_argument("--rig", metavar="TOML", help="rig file: focal length, principal point, lens distortion, baseline, axis, positions, disparity range and offset (docs/rig-format.md)")
     p.add_argument(
         "--cameras",
