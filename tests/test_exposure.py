@@ -87,7 +87,7 @@ def test_match_exposure_is_checked():
 def test_real_rows_with_one_view_brighter(name, least_share):
     """Three views, the last one's intensities times 1.25 (clipped at 255) or plus 20 grey levels. Unmatched, 5-8 %
     of the edge points remain (measured: Books 1277 / 1234 of 15585, Tsukuba 270 / 333 of 4299) and a third to two
-    thirds of the dense map; matched, 87-99 % (Books 13231-15440, bad-1px 1.57-1.89 against 1.36 %; Tsukuba
+    thirds of the dense map; matched, 85-99 % (Books 13231-15440, bad-1px 1.57-1.89 against 1.36 %; Tsukuba
     3956-4221, 1.11-1.24 against 1.14 %). The clipped highlights are lost for good."""
     from nfdepth import datasets
 
