@@ -332,6 +332,8 @@ def _cmd_video(args) -> int:
         options[key] = value
     if args.dense:
         options["dense"] = True
+    if args.no_match_exposure:
+        options["match_exposure"] = False
     figures = _distinct({"out": out, **figure_outputs(args, with_std=True)}, CLIError)
     rig = load_rig(args.rig)
     if args.poses:
@@ -438,6 +440,11 @@ def register(sub, CLIError) -> None:
         " little per frame (a longer row, at no delay)",
     )
     p.add_argument("--threads", type=int, metavar="N", help="with --dense: threads of the cost volume (default: all cores, as OpenCV)")
+    p.add_argument(
+        "--no-match-exposure",
+        action="store_true",
+        help="take the frames' intensities as they are (default: each triple's outer frames are mapped onto the middle frame's exposure)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_video)

@@ -128,14 +128,14 @@ def _canvas(camera: PinholeCamera, to_rect) -> tuple[int, int, float, float]:
     return r1 - r0 + 1, c1 - c0 + 1, camera.cx_px - c0, camera.cy_px - r0
 
 
-def _static_stereo(views, reference, positions, noise_std, threads):
+def _static_stereo(views, reference, positions, noise_std, threads, match_exposure=True):
     with warnings.catch_warnings():
         # static stereo's own notes (few edge points, behind the camera) say nothing a video run does not report
         warnings.simplefilter("ignore", UserWarning)
-        return static_stereo(views, reference=reference, positions=positions, noise_std=noise_std, threads=threads)
+        return static_stereo(views, reference=reference, positions=positions, noise_std=noise_std, threads=threads, match_exposure=match_exposure)
 
 
-def dense_row(frames, camera: PinholeCamera, rotations, positions, *, middle: int, noise_std: float, threads: int | None = None) -> DenseRow:
+def dense_row(frames, camera: PinholeCamera, rotations, positions, *, middle: int, noise_std, threads: int | None = None, match_exposure: bool = True) -> DenseRow:
     """Dense inverse depth (and its std) of frame ``middle`` of a row of frames taken along a path (module docstring).
 
     ``frames`` in the order taken (a triple, or more frames before the
@@ -143,9 +143,10 @@ def dense_row(frames, camera: PinholeCamera, rotations, positions, *, middle: in
     ``dense_frames_before``); ``rotations``: their camera-to-world
     matrices; ``positions``: their optical centres (world). The path runs
     from the first frame's position to the last's. ``noise_std`` is the
-    image noise of the frames as taken (resampling smooths it away);
-    ``threads`` as :func:`nfdepth.stereo.static_stereo`, whose pyramid
-    depth follows the canvas size.
+    image noise of the frames as taken (resampling smooths it away; None:
+    estimated); ``threads`` and ``match_exposure`` as
+    :func:`nfdepth.stereo.static_stereo`, whose pyramid depth follows the
+    canvas size.
     """
     h, w = camera.shape
     nan = np.full((h, w), np.nan)
@@ -182,7 +183,7 @@ def dense_row(frames, camera: PinholeCamera, rotations, positions, *, middle: in
         views.append(derotate(frame, maps))
         if j == middle:
             seen = maps[2]
-    res = _static_stereo(views, order.index(middle), [along_path[j] for j in order], noise_std, threads)
+    res = _static_stereo(views, order.index(middle), [along_path[j] for j in order], noise_std, threads, match_exposure)
     f = camera.focal_px
     rho_rect = res.disparity.astype(np.float64) / f  # px per unit of position = f / Z
     std_rect = res.uncertainty.astype(np.float64) / f

@@ -92,6 +92,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
+from ._exposure import match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
@@ -663,6 +664,7 @@ def depth_from_video(
     dense: bool = False,
     dense_frames_before: int = 1,
     threads: int | None = None,
+    match_exposure: bool = True,
 ) -> Iterator[VideoDepthFrame]:
     """Depth per frame of a camera moving (translating, and turning if its poses say so) through a static scene, fused over time.
 
@@ -736,6 +738,14 @@ def depth_from_video(
         frames use what came before them.
     threads : int, optional
         Threads of the dense map's cost volume (as ``static_stereo``).
+    match_exposure : bool
+        Map each triple's outer frames onto the middle frame's exposure
+        before the edge points are measured (gain and offset from a dense
+        map of the frames reduced to an eighth, undone where they explain
+        the differences between corresponding pixels;
+        :func:`nfdepth._exposure.match_frame_exposures`): eq. 4 reads an
+        exposure change between frames (auto exposure) as motion. The dense
+        maps match their own (``static_stereo``'s ``match_exposure``).
 
     Yields
     ------
@@ -798,6 +808,7 @@ def depth_from_video(
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)
     dense = check_bool("dense", dense)
+    match_exposure = check_bool("match_exposure", match_exposure)
     dense_frames_before = check_int("dense_frames_before", dense_frames_before, 1)
     if dense_frames_before > 1 and not dense:
         msg = f"dense_frames_before = {dense_frames_before} is for the dense maps: give dense=True too"
@@ -886,8 +897,10 @@ def depth_from_video(
                 warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
                 # the noise of the frames as taken (turning or warping resamples the outer ones and hides part of it)
                 edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": _noise_level(noise_std, window)}
+                # the outer frames on the middle one's exposure (the same frames where they share it)
+                matched = match_frame_exposures(window, cam, rotations, (p_prev, p_mid, p_next), middle=1, threads=threads)[0] if match_exposure else window
                 # a turning camera's outer frames are first turned to the middle one's orientation: a translating triple
-                triple, whole = _turned_triple(window, cam, rotations, sigma_px=sigma_px) if turns else (window, None)
+                triple, whole = _turned_triple(matched, cam, rotations, sigma_px=sigma_px) if turns else (matched, None)
                 outer = _outer_steps(rmat, (p_prev, p_mid, p_next), step_cam)
                 if levels == 1:
                     res = static_stereo_edges(triple, camera=cam, baseline=baseline, direction=step_cam, **edge_options)
