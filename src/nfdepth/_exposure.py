@@ -58,6 +58,15 @@ _ROUNDS = 2
 _BORDER_PX = 4
 
 
+def _reduction(shape) -> int:
+    """How many ``cv2.pyrDown`` halvings the first pass takes: up to :data:`_PASS_MAX_DOWN`, the shorter side kept at :data:`_PASS_MIN_SIDE_PX` or more."""
+    side = min(shape)
+    down = 0
+    while down < _PASS_MAX_DOWN and (side >> (down + 1)) >= _PASS_MIN_SIDE_PX:
+        down += 1
+    return down
+
+
 def _reduced(img: np.ndarray, down: int) -> np.ndarray:
     for _ in range(down):
         img = cv2.pyrDown(img)
@@ -85,10 +94,7 @@ def _fit(views, ref, t, disparity_range_px, threads):
     """One round: ``[(g_k, o_k) or None]`` per view from a reduced static-stereo pass (None: reference, or too few pixels)."""
     from .stereo import static_stereo
 
-    side = min(views[0].shape)
-    down = 0
-    while down < _PASS_MAX_DOWN and (side >> (down + 1)) >= _PASS_MIN_SIDE_PX:
-        down += 1
+    down = _reduction(views[0].shape)
     small = [_reduced(v, down) for v in views]
     options = {"positions": t, "threads": threads}
     if disparity_range_px is not None:
@@ -195,10 +201,7 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
 
     frames = [np.asarray(f, np.float32) for f in frames]
     total = [(1.0, 0.0)] * len(frames)
-    side = min(frames[0].shape)
-    down = 0
-    while down < _PASS_MAX_DOWN and (side >> (down + 1)) >= _PASS_MIN_SIDE_PX:
-        down += 1
+    down = _reduction(frames[0].shape)
     scale = 2.0**down
     for _ in range(_ROUNDS):
         small = [_reduced(f, down) for f in frames]
