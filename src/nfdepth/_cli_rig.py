@@ -132,8 +132,8 @@ def _cmd_dynamic(args) -> int:
     videos = [v for v in (args.moving_video, args.reference_video) if v is not None]
     if videos:
         return _cmd_dynamic_videos(args)
-    if args.crossings is not None or args.shared is not None:
-        raise CLIError("--crossings and --shared go with --moving-video and --reference-video")
+    if args.crossings is not None or args.shared is not None or args.no_match_exposure:
+        raise CLIError("--crossings, --shared and --no-match-exposure go with --moving-video and --reference-video")
     if len(args.images) != 5:
         raise CLIError(
             f"dynamic needs exactly 5 images I1 I2 I3 I4 I5 (I1, I3, I5 moving camera; I2, I3, I4 reference)"
@@ -221,6 +221,7 @@ def _cmd_dynamic_videos(args) -> int:
             raise CLIError(f"crossing {late[0]} needs frames {late[0] - 2}..{late[0] + 2}, but the videos have {n} frames (0..{n - 1})")
     results = []
     last = None
+    options["match_exposure"] = not args.no_match_exposure
     for res in dynamic_stereo_from_videos(moving, reference, rig=rig, crossings=crossings, shared=args.shared or "mean", **options):
         if kind == "npz":
             results.append(res)
@@ -230,7 +231,8 @@ def _cmd_dynamic_videos(args) -> int:
         n = int(res.valid.sum())
         z = res.depth[res.valid]
         rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
-        print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}")
+        matched = "" if res.exposure is None else f", the reference camera's exposure matched (gain {res.exposure[0]:.3g} offset {res.exposure[1]:+.3g})"
+        print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}{matched}")
         last = res
     if kind == "npz":
         write_crossings_npz(results, out, camera=rig.camera, force=args.force)
@@ -400,6 +402,11 @@ def register(sub, CLIError) -> None:
     p.add_argument("--reference-video", metavar="VIDEO", help="the reference camera's video, frame k taken with frame k of --moving-video")
     p.add_argument("--crossings", type=int, nargs="+", metavar="K", help="with videos: frames at which the two cameras coincide (default: the rig's motion.crossings)")
     p.add_argument("--shared", choices=("mean", "reference", "moving"), help="with videos: I3 from M[K] and R[K]: their mean (default) or one of them")
+    p.add_argument(
+        "--no-match-exposure",
+        action="store_true",
+        help="with videos: take the two cameras' intensities as they are (default: the reference camera's frames are mapped onto the moving camera's exposure, from M[K] and R[K])",
+    )
     p.add_argument("--rig", required=True, metavar="TOML", help="rig file with [camera] and [motion] (docs/rig-format.md)")
     p.add_argument("--out", required=True, metavar="OUT", help="depth at the edge points of I3: .pfm, .tif or .npy, NaN elsewhere;"
                    " with videos OUT.npz or a folder (depth_NNNNNN.tif, depth_std_NNNNNN.tif per crossing)")

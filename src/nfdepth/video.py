@@ -92,7 +92,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
-from ._exposure import match_frame_exposures
+from ._exposure import MAX_RESIDUAL_RATIO, _checked_fit, match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
@@ -1195,6 +1195,10 @@ class CrossingDepth:
         larger when they do not (then a ``UserWarning`` is issued).
     noise_std : float
         Image noise of ``M[c]`` and ``R[c]`` combined, ``hypot(n_M, n_R)``.
+    exposure : (float, float) or None
+        ``(gain, offset)`` of the reference camera's frames against the
+        moving camera's, ``R = gain M + offset`` at ``c``, undone before the
+        measurement (``match_exposure``); None when they share one exposure.
     """
 
     index: int
@@ -1203,6 +1207,7 @@ class CrossingDepth:
     depth_std: np.ndarray
     registration_residual: float
     noise_std: float
+    exposure: tuple | None = None
 
     @property
     def valid(self) -> np.ndarray:
@@ -1256,6 +1261,15 @@ def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean"
     return [m[0], r[0], _shared(m[1], r[1], shared), r[2], m[2]]
 
 
+def _match_cameras(moving_c, reference_window):
+    """The reference camera's frames on the moving camera's exposure, from ``M[c]`` and ``R[c]`` (window index 2), and the ``(gain, offset)`` undone or None."""
+    fit = _checked_fit(moving_c.ravel(), reference_window[2].ravel(), moving_c, reference_window[2])
+    if fit is None or fit[2] > MAX_RESIDUAL_RATIO:
+        return reference_window, None
+    g, o, _ = fit
+    return [((f - np.float32(o)) / np.float32(g)).astype(np.float32) for f in reference_window], (g, o)
+
+
 def _registration_residual(moving_c, reference_c, result: EdgeDepth) -> tuple[float, float]:
     noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
     if len(result) == 0:
@@ -1273,6 +1287,7 @@ def dynamic_stereo_from_videos(
     rig: Rig,
     crossings=None,
     shared: str = "mean",
+    match_exposure: bool = True,
     **options,
 ) -> Iterator[CrossingDepth]:
     """Dynamic stereo (paper eq. 4) at the crossing instants of two synchronised videos.
@@ -1298,6 +1313,12 @@ def dynamic_stereo_from_videos(
         ``[motion].crossings``); each needs two frames on either side.
     shared : {"mean", "reference", "moving"}
         How ``I3`` is formed from ``M[c]`` and ``R[c]``.
+    match_exposure : bool
+        Map the reference camera's frames onto the moving camera's exposure
+        first, from ``M[c]`` and ``R[c]`` (the same pose: every pixel a
+        pair; the line through their quantiles, undone where it explains at
+        least 30 % of their median difference, :mod:`nfdepth._exposure`):
+        eq. 4 reads two cameras' exposure difference as motion.
     **options
         Passed to :func:`nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...).
 
@@ -1325,6 +1346,7 @@ def dynamic_stereo_from_videos(
 
     motion = rig._need("motion")
     shared = _check_shared(shared)
+    match_exposure = check_bool("match_exposure", match_exposure)
     if crossings is None:
         if motion.crossings is None:
             where = f"rig '{rig.source}'" if rig.source else "the rig"
@@ -1345,9 +1367,10 @@ def dynamic_stereo_from_videos(
         m_win, r_win = m_win[-keep:], r_win[-keep:]
         while pending and pending[0] + 2 == n:
             c = pending.pop(0)
-            frames = interleaved_frames(m_win, r_win, 2, shared=shared)  # window index 2 is frame c
+            r_used, exposure = _match_cameras(m_win[2], r_win) if match_exposure else (r_win, None)
+            frames = interleaved_frames(m_win, r_used, 2, shared=shared)  # window index 2 is frame c
             result = dynamic_stereo_from_rig(frames, rig, **options)
-            residual, noise = _registration_residual(m_win[2], r_win[2], result)
+            residual, noise = _registration_residual(m_win[2], r_used[2], result)
             if residual > _MISMATCH_FACTOR * noise + 1.0:
                 warnings.warn(
                     f"crossing {c}: the two cameras' frames {c} differ by {residual:.3g} grey levels (RMS at the edge points; "
@@ -1357,7 +1380,7 @@ def dynamic_stereo_from_videos(
                     stacklevel=2,
                 )
             depth, std = edge_depth_maps(result)
-            yield CrossingDepth(c, result, depth, std, residual, noise)
+            yield CrossingDepth(c, result, depth, std, residual, noise, exposure)
         if not pending:
             return
     count = n + 1 if (m_win or r_win) else 0
