@@ -205,3 +205,17 @@ def test_two_cameras_of_different_exposure(monkeypatch):
     with pytest.warns(UserWarning, match="the two cameras' frames .* differ"):
         raw = list(dynamic_stereo_from_videos(moving, brighter, rig=rig, crossings=PAIR_CROSSINGS, match_exposure=False))
     assert raw[0].registration_residual > 5.0
+
+
+def test_a_narrow_given_range_is_searched_at_the_reduced_size_too():
+    """``disparity_range_px`` (2.5, 3.6) is 1.1 px wide: at an eighth of the size, 0.14 px, narrower than static stereo
+    accepts. The reduced pass widens it to 2 px about its centre; the call used to fail inside the pass."""
+    views, truth = slanted_plane_views(3.0, 0.0005, noise=2.0, min_wavelength_px=4.0, shape=(400, 640))
+    assert 2.5 < truth.min() and truth.max() < 3.6
+    lit = [*views[:2], (1.1 * views[2] + 5.0).astype(np.float32)]
+    plain = static_stereo(views, reference=1, disparity_range_px=(2.5, 3.6))
+    matched = static_stereo(lit, reference=1, disparity_range_px=(2.5, 3.6))
+    assert plain.exposure is None
+    g, o = matched.exposure[2]
+    assert g == pytest.approx(1.1, rel=0.01) and o == pytest.approx(5.0, abs=2.0)
+    assert np.isfinite(matched.disparity).sum() > 0.95 * np.isfinite(plain.disparity).sum()

@@ -98,10 +98,16 @@ def _fit(views, ref, t, disparity_range_px, threads):
     small = [_reduced(v, down) for v in views]
     options = {"positions": t, "threads": threads}
     if disparity_range_px is not None:
-        options["disparity_range_px"] = tuple(v / 2**down for v in disparity_range_px)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the reduced pass's own notes; the full run says what matters
-        res = static_stereo(small, reference=ref, match_exposure=False, **options)
+        # the range at the reduced size, at least 2 px wide (four candidate steps): a narrow range would be refused there
+        lo, hi = (v / 2**down for v in disparity_range_px)
+        mid, half = 0.5 * (lo + hi), max(0.5 * (hi - lo), 1.0)
+        options["disparity_range_px"] = (mid - half, mid + half)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the reduced pass's own notes; the full run says what matters
+            res = static_stereo(small, reference=ref, match_exposure=False, **options)
+    except ValueError:  # the reduced views cannot be measured (the full run says why, if it cannot either)
+        return [None] * len(views)
     d = res.disparity
     known = np.isfinite(d)
     r = small[ref]
@@ -207,9 +213,12 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
         small = [_reduced(f, down) for f in frames]
         h, w = small[middle].shape
         cam = PinholeCamera(camera.focal_px / scale, w, h, (camera.cx_px + 0.5) / scale - 0.5, (camera.cy_px + 0.5) / scale - 0.5)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            row = dense_row(small, cam, rotations, positions, middle=middle, noise_std=None, threads=threads, match_exposure=False)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                row = dense_row(small, cam, rotations, positions, middle=middle, noise_std=None, threads=threads, match_exposure=False)
+        except ValueError:  # the reduced frames cannot be measured: left as they are
+            break
         rho = row.rho
         m = _BORDER_PX
         rows, cols = np.mgrid[0:h, 0:w]
