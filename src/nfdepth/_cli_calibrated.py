@@ -23,15 +23,14 @@ _REFUSED = {
 def run_calibrated_stereo(args, CLIError) -> int:
     """The ``--cameras`` branch of ``nfdepth stereo``: depth (scene units) in the reference camera's own pixels."""
     from ._cli_rig import write_figures
-    from .cli import _depth_range, _exposure_note, _positive, _stereo_outputs
-    from .io import (
-        read_image,
-        to_float32_map,
-        to_rgb8,
-        write_array,
-        write_colormap_png,
-        write_ply,
+    from .cli import (
+        _depth_range,
+        _exposure_note,
+        _positive,
+        _stereo_outputs,
+        _write_stereo_maps,
     )
+    from .io import read_image, to_float32_map, to_rgb8, write_ply
     from .rectify import calibrated_grid_depth, calibrated_row_depth, load_cameras
 
     for key, why in _REFUSED.items():
@@ -96,17 +95,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
     hint = "give the cameras' positions in a unit that keeps depths in that range"
     depth = to_float32_map(res.depth, what="a depth", hint=hint)
     std = to_float32_map(res.depth_std, what="a standard deviation", hint=hint)
-    write_array(outputs[0], depth, force=args.force)
-    k = 1
-    if args.uncertainty:
-        write_array(outputs[k], std, force=args.force)
-        k += 1
-    if args.fill_mask:
-        write_array(outputs[k], np.where(np.isfinite(depth), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)
-        k += 1
-    if args.preview:
-        write_colormap_png(outputs[k], depth, force=args.force)
-        k += 1
+    k = _write_stereo_maps(args, outputs, depth, std, filled)
     if args.ply:
         pts, cols = res.points(image=to_rgb8(read_image(args.views[reference], grey=False, dtype=None)))
         write_ply(outputs[k], pts, colors=cols, force=args.force)

@@ -151,6 +151,11 @@ def _checked_fit(x, y, ref_image, image):
     return g, o, after / before if before > 0 else 1.0
 
 
+def _undone(image, g: float, o: float) -> np.ndarray:
+    """``image`` (``g I + o`` of another exposure) on that exposure: ``(image - o) / g``, float32."""
+    return ((image - np.float32(o)) / np.float32(g)).astype(np.float32)
+
+
 def _undo(images, total, k, fit) -> bool:
     """Undo ``fit`` (``(g, o, ratio)`` or None) on ``images[k]`` if it explains enough, composing ``total[k]``; whether it did.
 
@@ -163,7 +168,7 @@ def _undo(images, total, k, fit) -> bool:
     g, o, ratio = fit
     if ratio > (1.0 if total[k] != (1.0, 0.0) else MAX_RESIDUAL_RATIO):
         return False
-    images[k] = ((images[k] - np.float32(o)) / np.float32(g)).astype(np.float32)
+    images[k] = _undone(images[k], g, o)
     g0, o0 = total[k]
     total[k] = (g0 * g, o0 + g0 * o)  # I = g0 (g I_ref + o) + o0
     return True
@@ -243,3 +248,17 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
         if not moved:
             break
     return frames, [None if k == middle or total[k] == (1.0, 0.0) else total[k] for k in range(len(frames))]
+
+
+def match_camera_exposure(first, frames, *, at: int):
+    """A second camera's ``frames`` mapped onto the first camera's exposure, and the ``(gain, offset)`` undone or None.
+
+    ``first`` and ``frames[at]`` are taken from one pose (dynamic stereo's
+    crossing), so every pixel is a pair: the same quantile line and test as
+    :func:`match_exposures` (``frames[k] = gain first + offset``).
+    """
+    images, total = [frames[at]], [(1.0, 0.0)]
+    if not _undo(images, total, 0, _checked_fit(first.ravel(), frames[at].ravel(), first, frames[at])):
+        return frames, None
+    g, o = total[0]
+    return [images[0] if k == at else _undone(f, g, o) for k, f in enumerate(frames)], (g, o)

@@ -396,8 +396,29 @@ def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     return outputs, figures
 
 
+def _write_stereo_maps(args, outputs, values, std, filled) -> int:
+    """Write the maps of :func:`_stereo_outputs`' paths but the point cloud: ``--out``, ``--uncertainty``, ``--fill-mask``, ``--preview``.
+
+    ``filled``: the mask of filled pixels (with ``--fill``). Returns the index of the next path (``--ply``'s, if given).
+    """
+    from .io import write_array, write_colormap_png
+
+    write_array(outputs[0], values, force=args.force)
+    k = 1
+    if args.uncertainty:
+        write_array(outputs[k], std, force=args.force)
+        k += 1
+    if args.fill_mask:
+        write_array(outputs[k], np.where(np.isfinite(values), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)
+        k += 1
+    if args.preview:
+        write_colormap_png(outputs[k], values, force=args.force)
+        k += 1
+    return k
+
+
 def _cmd_stereo(args) -> int:
-    from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_array, write_colormap_png, write_ply
+    from .io import depth_to_points, read_image, to_float32_map, to_rgb8, write_ply
     from .stereo import check_depth_scale, check_disparity_offset, disparity_range_for_depths, static_stereo
 
     if len(args.views) < 2:
@@ -571,17 +592,7 @@ def _cmd_stereo(args) -> int:
     hint = "give --focal-px and --baseline (or the rig's) in units that keep depths in that range"
     values = to_float32_map(values, what=f"a {'depth' if focal is not None else 'disparity'}", hint=hint)
     std = to_float32_map(std, what="a standard deviation", hint=hint)
-    write_array(outputs[0], values, force=args.force)
-    k = 1
-    if args.uncertainty:
-        write_array(outputs[k], std, force=args.force)
-        k += 1
-    if args.fill_mask:
-        write_array(outputs[k], np.where(np.isfinite(values), filled.astype(np.float32), np.nan).astype(np.float32), force=args.force)
-        k += 1
-    if args.preview:
-        write_colormap_png(outputs[k], values, force=args.force)
-        k += 1
+    k = _write_stereo_maps(args, outputs, values, std, filled)
     if args.ply:
         cam_ref = read_image(args.views[reference], grey=False, dtype=None)
         if rig is not None and any(rig.distortion):  # colours on the undistorted grid of the depth

@@ -1828,6 +1828,7 @@ def static_stereo(
         msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
         raise ValueError(msg)
     view_schedule = check_bool("view_schedule", view_schedule)
+    match_exposure = check_bool("match_exposure", match_exposure)
     cost_volume = check_bool("cost_volume", cost_volume)
     if aggregation not in ("guided", "gaussian"):
         msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
@@ -1890,7 +1891,6 @@ def static_stereo(
         msg = f"levels must be >= 1 and leave at least 4 px at the coarsest level, got {levels!r}"
         raise ValueError(msg)
     levels = 1 if search_range is not None else levels
-    match_exposure = check_bool("match_exposure", match_exposure)
     exposure = None
     if match_exposure:
         views, applied = match_exposures(views, ref, t, disparity_range_px=search_range, threads=threads)

@@ -92,7 +92,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
-from ._exposure import MAX_RESIDUAL_RATIO, _checked_fit, match_frame_exposures
+from ._exposure import match_camera_exposure, match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
@@ -1261,15 +1261,6 @@ def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean"
     return [m[0], r[0], _shared(m[1], r[1], shared), r[2], m[2]]
 
 
-def _match_cameras(moving_c, reference_window):
-    """The reference camera's frames on the moving camera's exposure, from ``M[c]`` and ``R[c]`` (window index 2), and the ``(gain, offset)`` undone or None."""
-    fit = _checked_fit(moving_c.ravel(), reference_window[2].ravel(), moving_c, reference_window[2])
-    if fit is None or fit[2] > MAX_RESIDUAL_RATIO:
-        return reference_window, None
-    g, o, _ = fit
-    return [((f - np.float32(o)) / np.float32(g)).astype(np.float32) for f in reference_window], (g, o)
-
-
 def _registration_residual(moving_c, reference_c, result: EdgeDepth) -> tuple[float, float]:
     noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
     if len(result) == 0:
@@ -1367,7 +1358,7 @@ def dynamic_stereo_from_videos(
         m_win, r_win = m_win[-keep:], r_win[-keep:]
         while pending and pending[0] + 2 == n:
             c = pending.pop(0)
-            r_used, exposure = _match_cameras(m_win[2], r_win) if match_exposure else (r_win, None)
+            r_used, exposure = match_camera_exposure(m_win[2], r_win, at=2) if match_exposure else (r_win, None)  # R[c] against M[c]
             frames = interleaved_frames(m_win, r_used, 2, shared=shared)  # window index 2 is frame c
             result = dynamic_stereo_from_rig(frames, rig, **options)
             residual, noise = _registration_residual(m_win[2], r_used[2], result)
