@@ -895,3 +895,84 @@ def test_video_cli_broken_frame_leaves_no_maps_in_the_folder(tmp_path, capsys, s
     code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", out, "--quiet")
     assert code == 3 and err.count("\n") == 1 and "f6.png': OpenCV could not decode it as PNG" in err
     assert not out.exists() or list(out.iterdir()) == []  # was: depth_00000[1-4].tif and their std maps
+
+
+def _update_per_pixel(prior, rho_m, var_m, *, gate, max_age):
+    """The fusion rule of ``nfdepth.video._update`` written out pixel by pixel (the reference its arrays must equal)."""
+    h, w = rho_m.shape
+    rho, var = np.full((h, w), np.nan), np.full((h, w), np.nan)
+    age, count = np.zeros((h, w), np.int32), np.zeros((h, w), np.int32)
+    consumed = set()
+    fused = {}
+    for i in range(h):
+        for j in range(w):
+            if not np.isfinite(rho_m[i, j]):
+                continue
+            src = (i, j) if np.isfinite(prior.var[i, j]) else None
+            if src is None:  # the lowest-variance 3 x 3 neighbour with a prior, the first in row order on ties
+                best = np.inf
+                for di in (-1, 0, 1):
+                    for dj in (-1, 0, 1):
+                        a, b = i + di, j + dj
+                        if (di, dj) != (0, 0) and 0 <= a < h and 0 <= b < w and np.isfinite(prior.var[a, b]) and prior.var[a, b] < best:
+                            best, src = prior.var[a, b], (a, b)
+            if src is not None:
+                consumed.add(src)
+                p_rho, p_var = prior.rho[src], prior.var[src]
+                if abs(p_rho - rho_m[i, j]) <= gate * np.sqrt(p_var + var_m[i, j]):
+                    info = 1.0 / p_var + 1.0 / var_m[i, j]
+                    fused[i, j] = ((p_rho / p_var + rho_m[i, j] / var_m[i, j]) / info, 1.0 / info, prior.count[src] + 1)
+                    continue
+            fused[i, j] = (rho_m[i, j], var_m[i, j], 1)
+    for i in range(h):
+        for j in range(w):
+            if np.isfinite(prior.rho[i, j]) and (i, j) not in fused and (i, j) not in consumed and prior.age[i, j] <= max_age:
+                rho[i, j], var[i, j], age[i, j], count[i, j] = prior.rho[i, j], prior.var[i, j], prior.age[i, j], prior.count[i, j]
+    for (i, j), (r, v, c) in fused.items():
+        rho[i, j], var[i, j], age[i, j], count[i, j] = r, v, 0, c
+    return rho, var, age, count
+
+
+def test_fusion_update_equals_the_per_pixel_rule():
+    """The Kalman update visits only the measured pixels: the same state as the rule applied pixel by pixel,
+    with priors on the border, ties between neighbours, inconsistent measurements and old points."""
+    from nfdepth.video import _State, _update
+
+    rng = np.random.default_rng(7)
+    h, w = 23, 31
+    for trial in range(6):
+        prior = _State((h, w))
+        has = rng.random((h, w)) < 0.4
+        prior.rho[has] = rng.uniform(0.1, 1.0, has.sum())
+        prior.var[has] = rng.choice([1e-4, 2e-4, 4e-4], has.sum())  # few values: ties between neighbours
+        prior.age[has] = rng.integers(0, 4, has.sum())
+        prior.count[has] = rng.integers(1, 9, has.sum())
+        rho_m, var_m = np.full((h, w), np.nan), np.full((h, w), np.nan)
+        meas = rng.random((h, w)) < (0.1 if trial % 2 else 0.6)
+        rho_m[meas] = rng.uniform(0.1, 1.0, meas.sum())
+        var_m[meas] = rng.uniform(1e-4, 1e-2, meas.sum())
+        got = _update(prior, rho_m, var_m, gate=4.0, max_age=2)
+        want = _update_per_pixel(prior, rho_m, var_m, gate=4.0, max_age=2)
+        for name, a, b in zip(("rho", "var", "age", "count"), (got.rho, got.var, got.age, got.count), want):
+            np.testing.assert_array_equal(a, b, err_msg=f"trial {trial}: {name}")
+        assert np.isfinite(got.rho).sum() > meas.sum()  # some unmeasured points survive
+        assert (got.count > 1).any()  # and some are fused
+
+
+def test_noise_estimated_once_per_frame_gives_the_per_triple_median(scene, monkeypatch):
+    """Each frame's noise is estimated once and serves its three triples: the depths equal those from
+    the noise the pipeline would get by estimating every triple's frames afresh (given per run here)."""
+    from nfdepth import video
+    from nfdepth.normal_flow import estimate_noise_std
+
+    calls = []
+    real = video.estimate_noise_std
+    monkeypatch.setattr(video, "estimate_noise_std", lambda f: calls.append(1) or real(f))
+    frames = list(scene.frames[:5])
+    estimated = list(depth_from_video(frames, camera=scene.camera, velocity=STEP))
+    assert len(calls) == len(frames)
+    for k, frame in enumerate(estimated):
+        noise = float(np.median([estimate_noise_std(np.asarray(f, np.float32)) for f in frames[k : k + 3]]))  # as read
+        given = list(depth_from_video(frames[k : k + 3], camera=scene.camera, velocity=STEP, noise_std=noise, first_frame=k))
+        assert given[0].index == frame.index
+        np.testing.assert_array_equal(frame.measured_inverse_depth_std, given[0].measured_inverse_depth_std)

@@ -11,9 +11,11 @@ import pytest
 import nfdepth.cli
 from nfdepth import synthetic
 from nfdepth._translating_pyramid import (
+    _motion_limit,
     dense_prior,
     flow_directions,
     outer_flow_directions,
+    warp_outer_frames,
 )
 from nfdepth.camera import PinholeCamera, RigidMotion, image_flow_px
 from nfdepth.cli import main
@@ -186,6 +188,36 @@ def test_equal_steps_keep_the_central_warp():
     before, after = _outer_steps(np.eye(3), [(0.0, 0, 0), (0.1, 0, 0), (0.3, 0, 0)], 1.5 * step)
     np.testing.assert_allclose(before, -step)
     np.testing.assert_allclose(after, 2.0 * step)
+
+
+def test_warp_reads_each_outer_frame_at_its_own_motion():
+    """The outer frames are read at ``x + rho a_j`` (bilinear, border replicated) and ``inside`` says where both reads fall
+    inside; without it, the same frames. The update's bound is 1 px of the fastest frame's motion: with equal steps the
+    central field's length, bit for bit."""
+    cam = PinholeCamera(100.0, 40, 30)
+    v = np.array([-0.3, 0.1, 0.05])
+    central = flow_directions(cam, v, (30, 40))
+    rng = np.random.default_rng(3)
+    frames = [rng.random((30, 40), dtype=np.float32) for _ in range(3)]
+    rho = rng.uniform(0.0, 4.0, (30, 40)).astype(np.float32)
+    for steps in (None, (v, -2.0 * v)):
+        directions = outer_flow_directions(cam, v, steps, central)
+        before, after, inside = warp_outer_frames(frames, rho, directions)
+        rows, cols = np.mgrid[0:30, 0:40].astype(np.float32)
+        both = np.ones((30, 40), bool)
+        for got, frame, (a_col, a_row, k_z) in zip((before, after), (frames[0], frames[2]), directions):
+            moved = rho / np.maximum(np.float32(1.0) - rho * np.float32(k_z), np.float32(0.05))
+            map_c, map_r = cols + moved * a_col, rows + moved * a_row
+            want = cv2.remap(frame, map_c, map_r, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+            np.testing.assert_array_equal(got, want)
+            both &= (map_c >= 0) & (map_c <= 39) & (map_r >= 0) & (map_r <= 29)
+        np.testing.assert_array_equal(inside, both)
+        assert 0 < both.mean() < 1
+        b2, a2, none = warp_outer_frames(frames, rho, directions, inside=False)
+        assert none is None and np.array_equal(b2, before) and np.array_equal(a2, after)
+        fastest = np.maximum(np.hypot(*directions[0][:2]), np.hypot(*directions[1][:2]))
+        want_limit = 1.0 / np.maximum(np.maximum(np.hypot(*central), fastest), np.float32(1e-12))
+        np.testing.assert_array_equal(_motion_limit(*central, directions, steps is None), want_limit.astype(np.float32))
 
 
 def test_one_level_warns_of_unequal_steps():

@@ -139,25 +139,36 @@ def outer_reach(translation, outer_steps) -> float:
     return max(_magnitude(step) for step in outer_steps) / _magnitude(translation)
 
 
-def warp_outer_frames(frames, rho, directions):
+def warp_outer_frames(frames, rho, directions, *, inside: bool = True):
     """Frames ``k-1`` and ``k+1`` resampled at ``x + rho a_j(x)`` (linear, border replicated), and where both reads lie inside.
 
     ``directions`` is :func:`outer_flow_directions`'s pair. Returns
-    ``(before, after, inside)``.
+    ``(before, after, inside)``; ``inside`` is None when not asked for.
     """
     h, w = rho.shape
     cols = np.arange(w, dtype=np.float32)[None, :]
     rows = np.arange(h, dtype=np.float32)[:, None]
-    out, inside = [], np.ones((h, w), bool)
+    out, within = [], (np.ones((h, w), bool) if inside else None)
+    map_c, map_r = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
     for frame, (a_col, a_row, k_z) in zip((frames[0], frames[2]), directions):
         # the finite step's depth change (k_z = 0 for a sideways step: rho itself, bit for bit); a point
         # the outer camera passed (1 - rho k_z <= 0) is read as if 20 times nearer, an edge of the frame at most
         moved = rho if k_z == 0.0 else rho / np.maximum(np.float32(1.0) - rho * np.float32(k_z), np.float32(0.05))
-        map_c = (cols + moved * a_col).astype(np.float32)
-        map_r = (rows + moved * a_row).astype(np.float32)
+        # x + rho a in float32, in place (no temporaries: fresh pages cost a fault each)
+        np.add(cols, np.multiply(moved, a_col, out=map_c), out=map_c)
+        np.add(rows, np.multiply(moved, a_row, out=map_r), out=map_r)
         out.append(remap_linear(frame, map_c, map_r))
-        inside &= (map_c >= 0) & (map_c <= w - 1) & (map_r >= 0) & (map_r <= h - 1)
-    return out[0], out[1], inside
+        if inside:
+            within &= (map_c >= 0) & (map_c <= w - 1) & (map_r >= 0) & (map_r <= h - 1)
+    return out[0], out[1], within
+
+
+def _motion_limit(a_col, a_row, directions, equal_steps: bool) -> np.ndarray:
+    """Largest update of ``rho f |V|`` that moves a point by 1 px of its level, in the middle or the outer frame that moves most."""
+    central = np.hypot(a_col, a_row)
+    # equal steps: the outer fields are -a and a, whose lengths are the central one's bit for bit
+    fastest = central if equal_steps else np.maximum(np.hypot(*directions[0][:2]), np.hypot(*directions[1][:2]))
+    return (1.0 / np.maximum(np.maximum(central, fastest), np.float32(1e-12))).astype(np.float32)
 
 
 def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, outer_steps=None) -> np.ndarray:
@@ -177,8 +188,7 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, oute
         a_col, a_row = flow_directions(camera, translation, (h, w), scale=2.0**level)
         directions = outer_flow_directions(camera, translation, outer_steps, (a_col, a_row), scale=2.0**level)
         # a step moves a point by at most 1 px of this level (in the outer frame that moves most)
-        fastest = np.maximum(np.hypot(*directions[0][:2]), np.hypot(*directions[1][:2]))
-        limit = (1.0 / np.maximum(np.maximum(np.hypot(a_col, a_row), fastest), np.float32(1e-12))).astype(np.float32)
+        limit = _motion_limit(a_col, a_row, directions, outer_steps is None)
         rho = np.zeros((h, w), np.float32) if rho is None else cv2.resize(rho, (w, h), interpolation=cv2.INTER_LINEAR)
         g_col = cv2.Sobel(smoothed[1], cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)
         g_row = cv2.Sobel(smoothed[1], cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT) * np.float32(0.5)
@@ -186,11 +196,20 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, oute
         den = gaussian_smooth(g * g, sigma_px=_WINDOW_PX)
         positive = den[den > 0]
         ridge = np.float32(_RIDGE * float(np.median(positive))) if positive.size else np.float32(1.0)
+        den += ridge
+        low = -limit
         for _ in range(_ITERATIONS):
-            before, after, _inside = warp_outer_frames(smoothed, rho, directions)
-            num = gaussian_smooth(g * (np.float32(0.5) * (after - before)), sigma_px=_WINDOW_PX)
-            step = np.clip(-num / (den + ridge), -limit, limit)
-            rho = cv2.medianBlur((rho + step).astype(np.float32), 5)
+            before, after, _ = warp_outer_frames(smoothed, rho, directions, inside=False)
+            # the same float32 operations as g (0.5 (after - before)), -num / den, clipped, rho + step; in place
+            change = np.subtract(after, before, out=after)
+            change *= np.float32(0.5)
+            change *= g
+            num = gaussian_smooth(change, sigma_px=_WINDOW_PX)
+            step = np.negative(num, out=num)
+            step /= den
+            np.clip(step, low, limit, out=step)
+            step += rho
+            rho = cv2.medianBlur(step, 5)
     return rho
 
 

@@ -106,7 +106,6 @@ from .pipelines import (
     _DISPLACEMENT_WARNING,
     EdgeDepth,
     _median_displacement,
-    _noise_level,
     static_stereo_edges,
 )
 from .rig import MAX_TURN_DEG, Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
@@ -376,38 +375,57 @@ def _predict(state: _State, camera: PinholeCamera, displacement_cam: np.ndarray,
     return out
 
 
-def _neighbour_prior(prior: _State, mask: np.ndarray):
-    """Per measured pixel: prior from its own pixel, else the lowest-variance 3 x 3 neighbour."""
+def _neighbour_prior(prior: _State, rows: np.ndarray, cols: np.ndarray):
+    """Prior of each measured pixel ``(rows, cols)``: its own pixel's, else the lowest-variance 3 x 3 neighbour's.
+
+    Returns ``(rho, var, count, source)`` per measured pixel: ``var`` is inf
+    and ``source`` (the flat index of the prior's pixel) -1 where no pixel
+    has a prior. Neighbours in a fixed order; the first of equal variances
+    wins. Only the measured pixels are visited (edge points: a few percent
+    of the frame).
+    """
     h, w = prior.rho.shape
-    best_var = np.full((h, w), np.inf)
-    best_rho = np.full((h, w), np.nan)
-    best_count = np.zeros((h, w), dtype=np.int32)
-    src_lin = np.full((h, w), -1, dtype=np.int64)
-    pad = 1
-    var_p = np.pad(np.where(np.isfinite(prior.var), prior.var, np.inf), pad, constant_values=np.inf)
-    rho_p = np.pad(prior.rho, pad, constant_values=np.nan)
-    cnt_p = np.pad(prior.count, pad)
-    lin_p = np.pad(np.arange(h * w, dtype=np.int64).reshape(h, w), pad, constant_values=-1)
-    offsets = [(0, 0)] + [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if (di, dj) != (0, 0)]
-    for di, dj in offsets:
-        v = var_p[pad + di : pad + di + h, pad + dj : pad + dj + w]
-        # the own pixel wins outright whenever it has a prior
-        better = mask & (v < best_var) & ((di, dj) == (0, 0) or ~np.isfinite(prior.var))
-        best_var = np.where(better, v, best_var)
-        best_rho = np.where(better, rho_p[pad + di : pad + di + h, pad + dj : pad + dj + w], best_rho)
-        best_count = np.where(better, cnt_p[pad + di : pad + di + h, pad + dj : pad + dj + w], best_count)
-        src_lin = np.where(better, lin_p[pad + di : pad + di + h, pad + dj : pad + dj + w], src_lin)
-    return best_rho, best_var, best_count, src_lin
+    n = rows.size
+    var = np.where(np.isfinite(prior.var), prior.var, np.inf)
+    best_var = var[rows, cols]  # the own pixel wins outright whenever it has a prior
+    src = np.where(np.isfinite(best_var), rows * w + cols, -1)
+    lone = ~np.isfinite(best_var)
+    r_lone, c_lone = rows[lone], cols[lone]
+    v_lone, s_lone = best_var[lone], src[lone]
+    for di, dj in ((di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if (di, dj) != (0, 0)):
+        r, c = r_lone + di, c_lone + dj
+        inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+        v = np.full(r.size, np.inf)
+        v[inside] = var[r[inside], c[inside]]
+        better = v < v_lone
+        v_lone = np.where(better, v, v_lone)
+        s_lone = np.where(better, r * w + c, s_lone)
+    best_var[lone] = v_lone
+    src[lone] = s_lone
+    known = src >= 0
+    best_rho = np.full(n, np.nan)
+    best_count = np.zeros(n, dtype=np.int32)
+    best_rho[known] = prior.rho.flat[src[known]]
+    best_count[known] = prior.count.flat[src[known]]
+    return best_rho, best_var, best_count, src
 
 
 def _update(prior: _State, rho_m: np.ndarray, var_m: np.ndarray, *, gate: float, max_age: int) -> _State:
+    """The state after this frame's measurements ``rho_m``, ``var_m`` (NaN where none).
+
+    A measurement is fused with its prior (:func:`_neighbour_prior`;
+    inverse-variance weights) where the two agree within ``gate`` standard
+    deviations, and taken as it is elsewhere. Unmeasured prior points
+    survive up to ``max_age`` frames unless a measurement took them over.
+    """
     measured = np.isfinite(rho_m)
-    p_rho, p_var, p_count, src = _neighbour_prior(prior, measured)
-    has_prior = measured & np.isfinite(p_var)
+    rows, cols = np.nonzero(measured)
+    p_rho, p_var, p_count, src = _neighbour_prior(prior, rows, cols)
+    r_m, v_m = rho_m[rows, cols], var_m[rows, cols]
+    has_prior = np.isfinite(p_var)
     with np.errstate(invalid="ignore"):
-        consistent = has_prior & (np.abs(p_rho - rho_m) <= gate * np.sqrt(p_var + var_m))
+        consistent = has_prior & (np.abs(p_rho - r_m) <= gate * np.sqrt(p_var + v_m))
     out = _State(prior.rho.shape)
-    # unmeasured prior points survive (until too old) unless a measurement took them over
     consumed = np.zeros(prior.rho.size, dtype=bool)
     consumed[src[has_prior]] = True
     survive = np.isfinite(prior.rho) & ~measured & ~consumed.reshape(prior.rho.shape) & (prior.age <= max_age)
@@ -415,16 +433,16 @@ def _update(prior: _State, rho_m: np.ndarray, var_m: np.ndarray, *, gate: float,
     out.var[survive] = prior.var[survive]
     out.age[survive] = prior.age[survive]
     out.count[survive] = prior.count[survive]
-    fresh = measured & ~consistent
-    out.rho[fresh] = rho_m[fresh]
-    out.var[fresh] = var_m[fresh]
-    out.count[fresh] = 1
     k = consistent
-    info = 1.0 / p_var[k] + 1.0 / var_m[k]
-    out.rho[k] = (p_rho[k] / p_var[k] + rho_m[k] / var_m[k]) / info
-    out.var[k] = 1.0 / info
-    out.count[k] = p_count[k] + 1
-    out.age[measured] = 0
+    info = 1.0 / p_var[k] + 1.0 / v_m[k]
+    rho_new = r_m.astype(np.float64)  # (copies) taken as measured where no prior agrees
+    var_new = v_m.astype(np.float64)
+    rho_new[k] = (p_rho[k] / p_var[k] + r_m[k] / v_m[k]) / info
+    var_new[k] = 1.0 / info
+    out.rho[rows, cols] = rho_new
+    out.var[rows, cols] = var_new
+    out.count[rows, cols] = np.where(k, p_count + 1, 1)
+    out.age[rows, cols] = 0
     return out
 
 
@@ -825,6 +843,7 @@ def depth_from_video(
     motion_name = _spec_name(spec, rig)
     lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
+    noises: list[float] = []  # the window's frames' noise estimates (each frame's once: it serves three triples)
     history: list[np.ndarray] = []  # dense: the last dense_frames_before + 2 frames
     state: _State | None = None
     prev_pos = prev_orientation = prev_rotation = None
@@ -857,6 +876,8 @@ def depth_from_video(
         if rig is not None and camera is None and any(rig.distortion):
             img = rig.undistort(img)
         window.append(img)
+        if noise_std is None:
+            noises.append(estimate_noise_std(img))
         if dense:
             history.append(img)
             if len(history) > dense_frames_before + 2:
@@ -865,6 +886,7 @@ def depth_from_video(
             continue
         if len(window) > 3:
             window.pop(0)
+            noises = noises[-3:]
         k = first + n - 1
         triples += 1
         p_prev, p_mid, p_next = (_position(spec, i, motion_name, rig) for i in (k - 1, k, k + 1))
@@ -896,7 +918,7 @@ def depth_from_video(
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
                 warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
                 # the noise of the frames as taken (turning or warping resamples the outer ones and hides part of it)
-                edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": _noise_level(noise_std, window)}
+                edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std if noise_std is not None else float(np.median(noises))}
                 # the outer frames on the middle one's exposure (the same frames where they share it)
                 matched = match_frame_exposures(window, cam, rotations, (p_prev, p_mid, p_next), middle=1, threads=threads)[0] if match_exposure else window
                 # a turning camera's outer frames are first turned to the middle one's orientation: a translating triple
