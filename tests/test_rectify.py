@@ -484,11 +484,17 @@ def test_a_depth_range_is_searched_as_disparities():
     cover, med, _ = _scores(given.depth, truth)
     assert cover > 0.9 and med < 0.005
     assert cover >= _scores(auto.depth, truth)[0] - 0.01
-    # a range that misses the plane: nothing is measured inside it
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the lost-scene warning
-        missed = calibrated_row_depth(views, cams, reference=1, depth_range=(10.0, 20.0))
-    assert np.isfinite(missed.depth).mean() < 0.05
+    # a range that misses the plane: nothing is measured inside it, and nothing outside it is returned
+    for far_off in ((10.0, 20.0), (6.3, 10.0), (3.0, 5.7)):
+        with pytest.warns(UserWarning, match="the scene may lie outside (the given range|it; widen the range)"):
+            missed = calibrated_row_depth(views, cams, reference=1, depth_range=far_off)
+        assert np.isfinite(missed.depth).mean() < 0.01
+        assert not ((missed.depth < far_off[0]) | (missed.depth > far_off[1])).any()
+    # one that cuts through it (5.8-6.24): only the depths inside it
+    part = calibrated_row_depth(views, cams, reference=1, depth_range=(5.0, 6.0))
+    inside = np.isfinite(part.depth)
+    assert not (part.depth[inside] > 6.0).any() and np.isfinite(part.depth_std[inside]).all()
+    assert 0.2 < inside.mean() and (truth[inside] < 6.0 * 1.01).all()  # depths within 1 % of the truth
 
 
 def test_a_rectified_rows_depth_range_is_f_over_depth():
@@ -506,6 +512,11 @@ def test_bad_depth_ranges_are_refused():
             calibrated_row_depth(views, cams, reference=1, depth_range=bad)
     with pytest.raises(TypeError, match="give depth_range or disparity_range_px, not both"):
         calibrated_row_depth(views, cams, reference=1, depth_range=(5.0, 7.0), disparity_range_px=(40.0, 80.0))
+    # refusals of the disparities a depth range gives are said of the depth range
+    with pytest.raises(ValueError, match=r"^depth_range \([0-9.e+-]+, inf\) gives the disparities 0\.\.inf px: NEAR is too near for a finite disparity"):
+        calibrated_row_depth(views, cams, reference=1, depth_range=(1e-320, np.inf))
+    with pytest.raises(ValueError, match=r"^depth_range \(20, 21\) \(disparities .* px per scene unit\): disparity_range_px = .* is narrower than two candidate steps .*; widen or move the depth range$"):
+        calibrated_row_depth(views, cams, reference=1, depth_range=(20.0, 21.0))
 
 
 def test_disparity_range_for_depths():

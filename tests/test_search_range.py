@@ -343,6 +343,42 @@ def test_cli_depth_range(plane_files, tmp_path, capsys):
     np.testing.assert_array_equal(read_pfm(outputs[0]), read_pfm(outputs[1]))
 
 
+def test_a_given_range_bounds_the_output(capsys):
+    """A range given (disparities or depths) is a bound: no value outside it comes back, and a range that misses
+    the scene (a plane at 30 px searched over 31..40 px, 20..29.5 px) warns that the scene may lie outside it.
+    Measured before: 20..29.5 px returned the whole plane at 29.96-30.01 px, without a warning."""
+    views = _plane((60, 80), 30.0)
+    for given in ((31.0, 40.0), (20.0, 29.5)):
+        with pytest.warns(UserWarning, match=r"no unique match between disparities .*: the scene may lie outside the given range"):
+            r = static_stereo(views, reference=1, disparity_range_px=given)
+        d = r.disparity[np.isfinite(r.disparity)]
+        assert d.size < 0.01 * r.disparity.size and not ((d < given[0]) | (d > given[1])).any()
+    r = static_stereo(views, reference=1, disparity_range_px=(25.0, 35.0))
+    assert np.isfinite(r.disparity).mean() > 0.9 and np.nanmax(np.abs(r.disparity - 30.0)) < 0.5
+
+
+def test_cli_depth_range_errors_name_the_depths(plane_files, tmp_path, capsys):
+    from nfdepth.cli import main
+
+    scale = ["--focal-px", "100", "--baseline", "0.1"]
+    for extra, message in (
+        (["--depth-range", "0.4", "0.41"], r"^nfdepth: error: --depth-range 0\.4 0\.41 \(disparities 24\.39\.\.25 px\): disparity_range_px = \(24\.3902, 25\) is narrower than two candidate steps .*; widen or move the depth range$"),
+        (["--depth-range", "1e-320", "1"], r"^nfdepth: error: --depth-range \([0-9.e+-]+, 1\) gives the disparities 10\.\.inf px: NEAR is too near for a finite disparity; give a larger NEAR$"),
+    ):
+        code = main(["stereo", *plane_files, *scale, *extra, "--out", str(tmp_path / "d.pfm")])
+        _, err = capsys.readouterr()
+        assert code == 2 and re.match(message, err.strip()), err
+        assert not (tmp_path / "d.pfm").exists()
+
+
+def test_cli_fill_does_not_go_with_edges_only(plane_files, tmp_path, capsys):
+    from nfdepth.cli import main
+
+    code = main(["stereo", *plane_files, "--edges-only", "--fill", "--out", str(tmp_path / "d.pfm")])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.strip().startswith("nfdepth: error: --fill fills the holes of the dense map: it does not go with --edges-only")
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
@@ -484,8 +520,7 @@ def test_a_winner_at_an_end_of_the_automatic_range_is_uncertain(monkeypatch):
     assert hi < 6.0 and r.valid.sum() < 0.01 * r.valid.size
     assert not np.any(r.disparity[r.valid] >= hi)
     assert any(f"100 % of the textured pixels have no unique match between disparities {lo:g} and {hi:g} px" in str(w.message) for w in caught)
-    real = stereo._search
-    monkeypatch.setattr(stereo, "_search", lambda lo, hi, *, ends, **kw: real(lo, hi, ends=(False, False), **kw))
+    monkeypatch.setattr(stereo, "_beyond", lambda d, *args: np.zeros(d.shape, bool))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = static_stereo(views, reference=1, levels=1)
@@ -548,7 +583,9 @@ def test_motorcycle_left_border_no_longer_matches_at_the_range_end():
 def test_a_given_range_is_searched_one_px_beyond_its_ends():
     """A plane at 8 px: a given range that ends 1.5 px short of it (0-6.5) used to report it at
     6.5 px; the outer end of the extra px (7.5) now catches it as outside (UNCERTAIN), with the
-    lost-match warning. A range ending 0.4 px short (0-7.6) still measures it."""
+    lost-match warning. A given range is a bound: one ending 0.4 px short (0-7.6), which measured
+    the plane at 8 px before, says so the same way; one ending within the bound's 0.1 px (0-7.95)
+    keeps it."""
     views = _plane((96, 128), 8.0)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -557,7 +594,9 @@ def test_a_given_range_is_searched_one_px_beyond_its_ends():
     assert not np.any(np.abs(short.disparity[short.valid] - 8.0) > 1.0)
     assert short.valid.mean() < 0.05
     assert any("no unique match between disparities 0 and 6.5 px" in str(w.message) for w in caught)
-    near = static_stereo(views, reference=1, disparity_range_px=(0.0, 7.6))
+    with pytest.warns(UserWarning, match="no unique match between disparities 0 and 7.6 px"):
+        assert static_stereo(views, reference=1, disparity_range_px=(0.0, 7.6)).valid.mean() < 0.05
+    near = static_stereo(views, reference=1, disparity_range_px=(0.0, 7.95))
     inner = near.disparity[8:-8, 16:-16]
     assert np.isfinite(inner).mean() > 0.95 and np.nanmedian(np.abs(inner - 8.0)) < 0.05
 

@@ -93,6 +93,18 @@ def test_a_sideways_camera_gives_static_stereo_of_its_triple():
     np.testing.assert_array_equal(r.dense_inverse_depth_std, (plain.uncertainty.astype(float) / CAMERA.focal_px).astype(np.float32))
 
 
+def test_dense_maps_follow_match_exposure():
+    """An outer frame 20 % brighter: the dense map is static stereo of the triple with and without its exposure matching,
+    as ``match_exposure`` says (the dense map had matched whatever it was told)."""
+    frames, _, positions, orientations = _film((1.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    frames[2] = np.float32(1.2) * frames[2]
+    for match in (True, False):
+        (r,) = _dense(frames, positions, orientations, noise_std=1.0, match_exposure=match)
+        plain = static_stereo(frames, reference=1, positions=[0.0, 1.0, 2.0], noise_std=1.0, match_exposure=match)
+        assert (plain.exposure is not None) == match
+        np.testing.assert_array_equal(r.dense_inverse_depth, (plain.disparity.astype(float) / CAMERA.focal_px).astype(np.float32))
+
+
 def _sideways_triple_scores(along):
     """``_scores`` of the dense map of three frames from ``(x, 0, 0)``, ``x`` in ``along`` (not turning)."""
     rng = np.random.default_rng(1)

@@ -81,11 +81,16 @@ def run_calibrated_stereo(args, CLIError) -> int:
         value = getattr(args, key)
         if value is not None:
             options[name] = value
-    if column:
-        res = calibrated_grid_depth(views, cameras, column_views, column_cameras, row_reference=reference, column_reference=column_reference, **options)
-        line = res.row
-    else:
-        res = line = calibrated_row_depth(views, cameras, reference=reference, **options)
+    try:
+        if column:
+            res = calibrated_grid_depth(views, cameras, column_views, column_cameras, row_reference=reference, column_reference=column_reference, **options)
+            line = res.row
+        else:
+            res = line = calibrated_row_depth(views, cameras, reference=reference, **options)
+    except ValueError as exc:  # the library names its keyword; the user gave the option
+        if depth_range is None or "depth_range (" not in str(exc):
+            raise
+        raise CLIError(str(exc).replace("depth_range (", "--depth-range (", 1)) from None
     filled = None
     if args.fill:  # along each line's rectified baseline (CalibratedRowDepth.filled); no std where filled
         from dataclasses import replace

@@ -381,6 +381,8 @@ def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
     if args.fill_mask and not args.fill:
         raise CLIError("--fill-mask needs --fill")
+    if args.fill and args.edges_only:
+        raise CLIError("--fill fills the holes of the dense map: it does not go with --edges-only (a map filled from the edge points alone would be mostly guesses)")
     if args.uncertainty:
         outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
     if args.fill_mask:
@@ -485,7 +487,10 @@ def _cmd_stereo(args) -> int:
             raise CLIError(f"--depth-range and {source} both set the search range: give one")
         if focal is None:
             raise CLIError("--depth-range needs --focal-px and --baseline (to turn the depths into disparities); or give --disparity-range")
-        lo, hi = disparity_range_for_depths(depth_range, focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        try:
+            lo, hi = disparity_range_for_depths(depth_range, focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        except ValueError as exc:
+            raise CLIError(str(exc).replace("depth_range", "--depth-range", 1)) from None
         args.disparity_range = [lo, hi]
     if offset != 0 and args.column:
         raise CLIError("--disparity-offset-px applies to one row: with --column the row and the column would each need their own offset")
@@ -557,23 +562,29 @@ def _cmd_stereo(args) -> int:
         options["cost_step_px"] = cost_step
     if args.no_match_exposure:
         options["match_exposure"] = False
-    if column:
-        from .xy_stereo import static_stereo_xy
+    try:
+        if column:
+            from .xy_stereo import static_stereo_xy
 
-        result = static_stereo_xy(
-            views,
-            column_views,
-            row_reference=reference,
-            column_reference=column_reference,
-            row_positions=args.positions,
-            column_positions=args.column_positions,
-            edges_only=args.edges_only,
-            **options,
-        )
-    else:
-        result = static_stereo(
-            views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
-        )
+            result = static_stereo_xy(
+                views,
+                column_views,
+                row_reference=reference,
+                column_reference=column_reference,
+                row_positions=args.positions,
+                column_positions=args.column_positions,
+                edges_only=args.edges_only,
+                **options,
+            )
+        else:
+            result = static_stereo(
+                views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
+            )
+    except ValueError as exc:
+        if depth_range is None:
+            raise
+        lo, hi = args.disparity_range
+        raise CLIError(f"--depth-range {depth_range[0]:g} {depth_range[1]:g} (disparities {lo:.4g}..{hi:.4g} px): {exc}; widen or move the depth range") from None
     filled = None
     if args.fill:
         from dataclasses import replace

@@ -477,11 +477,16 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
     outside every other view. ``depth_range``, ``(near, far)`` in scene
     units along the reference camera's axis (``far`` may be inf), is the
     search range instead of the pyramid's (:meth:`RectifiedRow.disparity_range`,
-    static stereo's ``disparity_range_px``). ``stereo_options`` go to static
-    stereo (not ``positions``, ``axis`` or ``reference``).
+    static stereo's ``disparity_range_px``) and a bound: depths outside it
+    are NaN. ``stereo_options`` go to static stereo (not ``positions``,
+    ``axis`` or ``reference``).
     """
     from ._validate import check_depth_range
-    from .stereo import static_stereo
+    from .stereo import (
+        _checked_depth_disparities,
+        _warn_if_mostly_beyond,
+        static_stereo,
+    )
 
     clash = sorted(set(stereo_options) & {"positions", "axis"})
     if clash:
@@ -494,8 +499,16 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         depth_range = check_depth_range("depth_range", depth_range)
     row = rectify_row(views, cameras, reference=reference)
     if depth_range is not None:
-        stereo_options["disparity_range_px"] = row.disparity_range(depth_range)
-    res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
+        with np.errstate(over="ignore", divide="ignore"):
+            searched = _checked_depth_disparities("depth_range", depth_range, row.disparity_range(depth_range))
+        stereo_options["disparity_range_px"] = searched
+    try:
+        res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
+    except ValueError as exc:
+        if depth_range is None:
+            raise
+        msg = f"depth_range ({depth_range[0]:g}, {depth_range[1]:g}) (disparities {searched[0]:.4g}..{searched[1]:.4g} px per scene unit): {exc}; widen or move the depth range"
+        raise ValueError(msg) from None
     d = np.asarray(res.disparity, dtype=np.float64)
     h, w = d.shape
     rows, cols = np.mgrid[0:h, 0:w]
@@ -515,6 +528,12 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         z = np.where(usable, row.focal_px / d, np.nan)
         z_std = np.where(usable, row.focal_px * np.asarray(res.uncertainty, dtype=np.float64) / d**2, np.nan)
     depth, depth_std = row.to_reference(z, std=z_std)
+    if depth_range is not None:  # the search covers the range along every ray: a bound on the depths themselves
+        with np.errstate(invalid="ignore"):
+            beyond = (depth < depth_range[0]) | (depth > depth_range[1])
+        depth[beyond] = np.nan
+        depth_std[beyond] = np.nan
+        _warn_if_mostly_beyond(int(np.count_nonzero(beyond)), int(np.count_nonzero(np.isfinite(depth))), f"depth_range ({depth_range[0]:g}, {depth_range[1]:g})")
     edges = row.to_reference(np.where(res.edge_mask & usable, 1.0, np.nan))
     return CalibratedRowDepth(
         depth=depth, depth_std=depth_std, edge_mask=np.isfinite(edges) & np.isfinite(depth), disparity=np.where(usable, d, np.nan).astype(np.float32), row=row, result=res

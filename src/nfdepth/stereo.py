@@ -545,7 +545,18 @@ def disparity_range_for_depths(depth_range, *, focal_px: float, baseline: float,
     near, far = check_depth_range("depth_range", depth_range)
     f, b = check_depth_scale(focal_px, baseline)
     offset = check_disparity_offset("disparity_offset_px", disparity_offset_px)
-    return f * b / far - offset, f * b / near - offset
+    with np.errstate(over="ignore"):
+        return _checked_depth_disparities("depth_range", (near, far), (f * b / far - offset, f * b / near - offset))
+
+
+def _checked_depth_disparities(name: str, depth_range, disparity_range) -> tuple[float, float]:
+    """``disparity_range`` (from the depths ``depth_range``), refused by ``name`` where a depth is too near for a finite disparity."""
+    near, far = depth_range
+    lo, hi = (float(v) for v in disparity_range)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        msg = f"{name} ({near:g}, {far:g}) gives the disparities {lo:g}..{hi:g} px: NEAR is too near for a finite disparity; give a larger NEAR"
+        raise ValueError(msg)
+    return lo, hi
 
 
 def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarray]:
@@ -1486,12 +1497,13 @@ def _shift_message(views, ref, *, axis) -> str | None:
     )
 
 
-def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=None, **search) -> str:
+def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=None, given=False, **search) -> str:
     """The warning for a cost volume that found no unique match at most textured pixels.
 
     ``searched``: the range as reported (:func:`_reported_range`).
     ``as_given``: the :func:`_coarse_search` of the views as given, when step
-    3d has run it (else it runs here). The coarse search runs twice, on the views as given and reversed: when
+    3d has run it (else it runs here). ``given``: the range was given (a
+    disparity or depth range), not found. The coarse search runs twice, on the views as given and reversed: when
     the reversed order matches uniquely at least ``_REVERSED_UNIQUE_SHARE``
     of the textured pixels and twice the share of the given order, the views
     are in the wrong order (with a motion too large for the pyramid, whose
@@ -1506,10 +1518,44 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
             f"search match uniquely, against {100.0 * given_share:.0f} % as given. Scene points must shift toward "
             f"-{'col' if axis == 'x' else 'row'} from the first view to the last (the camera moving toward +X / +Y)"
         )
+    if given:
+        return f"{where}: the scene may lie outside the given range (its matches beyond it are UNCERTAIN: widen the range), or the views are not rectified along the baseline"
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range, or the depths: --depth-range), or the views are not rectified along the baseline"
 
 
-def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, shift_px, spread, textured, min_cost_margin):
+def _warn_if_mostly_beyond(beyond: int, kept: int, what: str, *, warned: bool = False) -> None:
+    """Warn when most measured values lay beyond a given range (``what``) and were dropped, unless a warning said so (``warned``)."""
+    if beyond > kept and not warned:
+        warnings.warn(
+            f"{beyond} of {beyond + kept} measured pixels lie beyond {what} (UNCERTAIN): the scene may lie outside it; widen the range",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
+#: A given range bounds the output: a final disparity more than this many candidate
+#: steps beyond it is UNCERTAIN (0.2 steps, 0.1 px at the default step: twice the
+#: winner's sub-sample bias, so a surface exactly at an end keeps its pixels).
+_BOUND_STEPS = 0.2
+
+
+def _beyond(d, candidates, ends, given, margin):
+    """The disparities no match inside the range explains (the ``at_end`` of :func:`_search`).
+
+    The winners at an end of the candidates that ``ends`` (lower, upper)
+    rejects, and, for a ``given`` range ``(lo, hi)`` (searched two steps
+    beyond), those more than ``margin`` px outside it: a scene beyond the
+    range, not inside it (half a candidate step for the search's winners,
+    :data:`_BOUND_STEPS` steps for the final output).
+    """
+    out = ((d <= np.float32(candidates[0])) & ends[0]) | ((d >= np.float32(candidates[-1])) & ends[1])
+    if given is not None:
+        with np.errstate(invalid="ignore"):
+            out |= (d < np.float32(given[0] - margin)) | (d > np.float32(given[1] + margin))
+    return out
+
+
+def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, interleave, shift_px, spread, textured, min_cost_margin, given=None):
     """The cost volume over ``lo .. hi``: ``(d, margin, candidates, step, share, at_end, bias_px)``.
 
     ``step`` is the spacing of the search's grid; with ``interleave`` the
@@ -1519,7 +1565,8 @@ def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, inter
     penalty of a nearer side that shifts the scene little
     (:func:`nfdepth._cost_volume._both_sides`).
     ``at_end`` marks the winners at an end of the range that ``ends`` (lower,
-    upper) rejects; ``share`` is the share of the textured pixels with no
+    upper) rejects and, for a ``given`` range, those beyond it
+    (:func:`_beyond`); ``share`` is the share of the textured pixels with no
     unique match inside the range: ambiguous (cost margin below
     ``min_cost_margin``) or ``at_end`` (0 when there are too few textured pixels);
     ``bias_px`` is the RMS sub-sample bias of the winner.
@@ -1536,7 +1583,7 @@ def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, inter
     d, c_best, c_second = best_disparity(feats, t, ref, candidates, guide, radius=radius, interleave=interleave, shift_px=shift_px, **match)
     # uniqueness: the best cost against the best one more than 1 px away
     margin = _cost_margin(c_best, c_second, spread)
-    at_end = ((d <= np.float32(candidates[0])) & ends[0]) | ((d >= np.float32(candidates[-1])) & ends[1])
+    at_end = _beyond(d, candidates, ends, given, 0.5 * step)
     share = 0.0
     if np.count_nonzero(textured) >= _SEARCH_MIN_PIXELS:
         unmatched = at_end[textured]
@@ -1979,13 +2026,14 @@ def static_stereo(
                 finite = d[np.isfinite(d)]
                 shift = median(np.abs(finite)) if finite.size else math.nan
             step_px, interleave = _candidate_step(cost_step_px, float(np.max(np.abs(t))), shift, lo, hi)
-            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "shift_px": shift, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin}
+            volume = {"feats": feats, "t": t, "ref": ref, "guide": guide[0], "radius": cost_radius, "match": match, "step_px": step_px, "interleave": interleave, "shift_px": shift, "spread": spread, "textured": textured, "min_cost_margin": min_cost_margin, "given": search_range}
             # A winner at an end of the range is no minimum: its match lies
             # outside the range (UNCERTAIN). So are the ends 2 px beyond the
             # field's robust extremes and the extra step beyond a given range's;
             # an end the coarse search widened lies at that search's resolution
             # and keeps its winners.
-            d, margin, candidates, step, share, at_end, bias_px = _search(lo, hi, ends=(True, True), **volume)
+            ends = (True, True)
+            d, margin, candidates, step, share, at_end, bias_px = _search(lo, hi, ends=ends, **volume)
             as_given = None  # the coarse search of step 3d, when it runs
             coarse_search = {"guide_offset": p1, "spread": spread, "noise_floor": noise_floor, "min_cost_margin": min_cost_margin, "match": match}
             if search_range is None and levels > 1 and share > _RETRY_SHARE:
@@ -1996,6 +2044,7 @@ def static_stereo(
                     retry = _search(*wide, ends=(wide[0] == lo, wide[1] == hi), **volume)
                     if retry[4] <= share - _RETRY_MIN_GAIN:
                         d, margin, candidates, step, share, at_end, bias_px = retry
+                        ends = (wide[0] == lo, wide[1] == hi)
             del volume, feats, src
             searched = _reported_range(candidates, search_range, unit)
             message = None
@@ -2003,7 +2052,7 @@ def static_stereo(
                 as_given = as_given if as_given is not None else _coarse_search(pyramids, t, ref, **coarse_search)
                 message = axis_message = _axis_message(share, pyramids, t, ref, axis, as_given, **coarse_search)
             if message is None and share > _LOST_MATCH_SHARE and shift_message is None:
-                message = lost_message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, **coarse_search)
+                message = lost_message = _lost_match_message(share, searched, pyramids, t, ref, axis, as_given=as_given, given=search_range is not None, **coarse_search)
             if message is not None:
                 warnings.warn(message, UserWarning, stacklevel=2)
             if step > step_px * (1.0 + 1e-9):
@@ -2016,6 +2065,8 @@ def static_stereo(
                 )
             if cost_median_px > 1:
                 d = cv2.medianBlur(d, cost_median_px)
+                # the median carries an end's (or a beyond-range) winner to its neighbours: they are no match inside the range either
+                at_end |= _beyond(d, candidates, ends, search_range, 0.5 * step)
         propagate = bool(propagate_rounds) and level <= propagate_levels - 1
         if propagate:
             d = _propagate(smoothed, t, ref, d, guide[level], rounds=propagate_rounds, radius=propagate_radius, eps=guided_eps * 0.1)
@@ -2039,7 +2090,8 @@ def static_stereo(
     selection = select_edge_points(field, m.ref_nodes, min_gradient=min_gradient, max_corner_ratio=max_corner_ratio, corner_window_px=max(sigma_px, 1.0))
     edge_mask = selection.mask
     if not edge_mask.any():
-        warnings.warn(f"{_no_edge_points_message(selection)}; no depth can be measured", UserWarning, stacklevel=2)
+        what = "no depth can be measured" if edges_only else "the dense map is measured without them"
+        warnings.warn(f"{_no_edge_points_message(selection)}; {what}", UserWarning, stacklevel=2)
     h, w = d.shape
     reason = np.full((h, w), Reason.OK, np.uint8)
     info = m.grad_col**2 * m.s_tt  # each pixel's own information (inverse variance times s_c^2)
@@ -2062,6 +2114,10 @@ def static_stereo(
         if min_cost_margin > 0:
             reason[(reason == Reason.OK) & ~(margin >= min_cost_margin)] = Reason.UNCERTAIN
         reason[(reason == Reason.OK) & at_end] = Reason.UNCERTAIN
+        if search_range is not None:  # a given range is a bound: nothing beyond it by more than the winner's sub-sample bias
+            bound = (reason == Reason.OK) & _beyond(d, candidates, (False, False), search_range, _BOUND_STEPS * step)
+            reason[bound] = Reason.UNCERTAIN
+            _warn_if_mostly_beyond(int(np.count_nonzero(bound)), int(np.count_nonzero(reason == Reason.OK)), "the given range", warned=lost_message is not None)
     reason[(reason == Reason.OK) & (std > max_std_px)] = Reason.UNCERTAIN
     reason[(reason == Reason.OK) & (m.count < 2)] = Reason.NO_DATA
     if dense_reach_px < math.hypot(*shape):  # a reach beyond the image's diagonal limits nothing (as inf)
@@ -2096,6 +2152,8 @@ def static_stereo(
             if edge_cost_margin > 0:
                 r_e[(r_e == Reason.OK) & ~(margin[er, ec] >= edge_cost_margin)] = Reason.UNCERTAIN
             r_e[(r_e == Reason.OK) & at_end[er, ec]] = Reason.UNCERTAIN
+            if search_range is not None:
+                r_e[(r_e == Reason.OK) & _beyond(d_e, candidates, (False, False), search_range, _BOUND_STEPS * step)] = Reason.UNCERTAIN
         if edge_step_px > 0:
             # along the baseline (where occlusions lie) and across the edge (its normal)
             normal = (m.grad_row[er, ec] / g_mag, m.grad_col[er, ec] / g_mag)

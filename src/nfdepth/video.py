@@ -988,6 +988,7 @@ def depth_from_video(
                     middle=back,
                     noise_std=edge_options["noise_std"],
                     threads=threads,
+                    match_exposure=match_exposure,
                 )
                 known = dt.rho[np.isfinite(dt.rho) & (dt.rho != 0)]
                 to_float32_map(known, what="an inverse depth", hint=_UNITS_HINT)
