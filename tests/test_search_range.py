@@ -371,6 +371,35 @@ def test_cli_depth_range_errors_name_the_depths(plane_files, tmp_path, capsys):
         assert not (tmp_path / "d.pfm").exists()
 
 
+def test_cli_fill_at_infinity_has_no_finite_depth(tmp_path, capsys):
+    """A scene at infinity (views alike but for their noise) with a textureless band: the band is filled from
+    disparities about 0, and those at 0 or below have no finite depth: NaN, and the run says how many."""
+    from nfdepth.cli import main
+    from nfdepth.io import read_image
+
+    base = _texture((60, 80), 5)
+    base[:, 30:50] = 128.0
+    rng = np.random.default_rng(2)
+    names = []
+    for k in range(3):
+        names.append(str(tmp_path / f"v{k}.tif"))
+        cv2.imwrite(names[-1], (base + rng.normal(0.0, 1.0, base.shape)).astype(np.float32))
+    mask = tmp_path / "m.npy"
+    code = main(["stereo", *names, "--disparity-range", "-2", "4", "--fill", "--fill-mask", str(mask), "--focal-px", "100", "--baseline", "1", "--out", str(tmp_path / "z.tif")])
+    printed, err = capsys.readouterr()
+    assert code == 0, err
+    z, filled = read_image(tmp_path / "z.tif"), np.load(mask)
+    said = re.search(r"(\d+) more filled at a disparity of 0 or less: no finite depth, NaN", printed)
+    assert said, printed
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d, where = static_stereo([read_image(n) for n in names], reference=1, disparity_range_px=(-2.0, 4.0)).filled()
+    infinite = where & np.isfinite(d) & (d <= 0)
+    assert int(said.group(1)) == int(np.count_nonzero(infinite)) > 0
+    assert np.isnan(z[infinite]).all() and np.isnan(filled[infinite]).all()
+    assert np.isfinite(z[where & (d > 0)]).all()
+
+
 def test_cli_fill_does_not_go_with_edges_only(plane_files, tmp_path, capsys):
     from nfdepth.cli import main
 

@@ -26,6 +26,10 @@ views that share one exposure (the Middlebury rows, synthetic scenes:
 0.80-1.22) are left exactly as they are. Two rounds: the second pass,
 on the corrected views, refines a first correction wherever it lowers
 that difference further (a gain of 1.05 found as 1.041, then the rest).
+Views that differ grossly (:data:`GROSS_GAIN`, :data:`GROSS_OFFSET`: a
+gain of 3, an 8-bit view beside 16-bit ones) give the reduced pass no
+match at all, so they are first matched by the whole images' quantiles
+(:func:`_gross_prematch`), which views of one scene share closely.
 
 :func:`match_frame_exposures` does the same for a video triple (eq. 4 at
 the edge points of :func:`nfdepth.video.depth_from_video`), the
@@ -47,6 +51,12 @@ import numpy as np
 #: grey levels on the Middlebury rows and Tsukuba; 0.80-1.22 where the views share one exposure (real and
 #: synthetic).
 MAX_RESIDUAL_RATIO = 0.7
+#: A view whose whole-image quantiles differ from the reference's by a gain beyond this factor (either way),
+#: or by more than GROSS_OFFSET of the reference's 2-98 % intensity spread at its median, is first matched by
+#: those quantiles: the reduced pass finds no match between views that far apart (a gain of 3 with a third
+#: of the view clipped; an 8-bit view beside a 16-bit one).
+GROSS_GAIN = 1.5
+GROSS_OFFSET = 0.25
 #: Side of the reduced views of the first pass, px (at least; halved while the shorter side stays above it).
 _PASS_MIN_SIDE_PX = 48
 #: Largest reduction (an eighth of the size).
@@ -151,6 +161,48 @@ def _checked_fit(x, y, ref_image, image):
     return g, o, after / before if before > 0 else 1.0
 
 
+def _global_line(ref_image, image):
+    """``image ~ g ref_image + o`` from the two whole images' quantiles (no pixel pairs), or None.
+
+    The quantiles (2nd to 98th percentile) within 1 % of either image's
+    range ends are left out (clipped highlights and shadows); at least half
+    must remain.
+    """
+    q = np.linspace(2.0, 98.0, 49)
+    qx, qy = np.percentile(ref_image, q), np.percentile(image, q)
+    r_lo, r_hi = float(ref_image.min()), float(ref_image.max())
+    v_lo, v_hi = float(image.min()), float(image.max())
+    keep = (qx > r_lo + 0.01 * (r_hi - r_lo)) & (qx < r_hi - 0.01 * (r_hi - r_lo))
+    keep &= (qy > v_lo + 0.01 * (v_hi - v_lo)) & (qy < v_hi - 0.01 * (v_hi - v_lo))
+    if np.count_nonzero(keep) < q.size // 2 or np.ptp(qx[keep]) <= 0:
+        return None
+    a = np.stack([qx[keep], np.ones(np.count_nonzero(keep))], axis=1)
+    (g, o), *_ = np.linalg.lstsq(a, qy[keep], rcond=None)
+    return (float(g), float(o)) if np.isfinite(g) and np.isfinite(o) and g > 0 else None
+
+
+def _gross_prematch(images, ref: int, total) -> None:
+    """Undo, in place, the exposures that differ grossly from the reference's (:data:`GROSS_GAIN`, :data:`GROSS_OFFSET`).
+
+    Found from the whole images' quantiles (:func:`_global_line`): views of
+    one scene share their histograms closely, and a difference that large
+    (a gain of 3, an 8-bit view beside a 16-bit one) leaves the reduced
+    pass no match to fit from. The rounds of pairs refine what remains.
+    """
+    ref_image = images[ref]
+    spread = float(np.percentile(ref_image, 98.0) - np.percentile(ref_image, 2.0))
+    for k, image in enumerate(images):
+        if k == ref:
+            continue
+        line = _global_line(ref_image, image)
+        if line is None:
+            continue
+        g, o = line
+        if not (1.0 / GROSS_GAIN <= g <= GROSS_GAIN) or abs(o + (g - 1.0) * float(np.median(ref_image))) > GROSS_OFFSET * spread:
+            images[k] = _undone(image, g, o)
+            total[k] = (g, o)
+
+
 def _undone(image, g: float, o: float) -> np.ndarray:
     """``image`` (``g I + o`` of another exposure) on that exposure: ``(image - o) / g``, float32."""
     return ((image - np.float32(o)) / np.float32(g)).astype(np.float32)
@@ -185,6 +237,7 @@ def match_exposures(views, ref: int, t, *, disparity_range_px=None, threads: int
     """
     views = list(views)
     total = [(1.0, 0.0)] * len(views)
+    _gross_prematch(views, ref, total)
     for _ in range(_ROUNDS):
         fits = _fit(views, ref, t, disparity_range_px, threads)
         moved = False
@@ -212,6 +265,7 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
 
     frames = [np.asarray(f, np.float32) for f in frames]
     total = [(1.0, 0.0)] * len(frames)
+    _gross_prematch(frames, middle, total)
     down = _reduction(frames[0].shape)
     scale = 2.0**down
     for _ in range(_ROUNDS):

@@ -623,6 +623,9 @@ def _cmd_stereo(args) -> int:
     notes = ""
     if filled is not None:
         notes += f", {int(np.count_nonzero(filled & valid))} filled"
+        beyond = int(np.count_nonzero(filled & ~valid & np.isfinite(result.disparity)))
+        if beyond:  # a fill from a background at zero disparity (or measured just below it) has no finite depth
+            notes += f" ({beyond} more filled at a disparity of 0 or less: no finite depth, NaN)"
     if result.search_range_px is not None:
         notes += f", searched {result.search_range_px[0]:g}..{result.search_range_px[1]:g} px"
     if column:
