@@ -976,3 +976,26 @@ def test_noise_estimated_once_per_frame_gives_the_per_triple_median(scene, monke
         given = list(depth_from_video(frames[k : k + 3], camera=scene.camera, velocity=STEP, noise_std=noise, first_frame=k))
         assert given[0].index == frame.index
         np.testing.assert_array_equal(frame.measured_inverse_depth_std, given[0].measured_inverse_depth_std)
+
+
+def test_the_frames_whose_exposure_was_undone_are_reported(scene, tmp_path, capsys, rail_rig):
+    """Frame 3 of the sequence 20 % brighter: the triples around it report the exposures undone
+    (``VideoDepthFrame.exposure``, each outer frame against the middle one: frame 3 at 1.2 in the triples of frames
+    2 and 4, its neighbours at 1 / 1.2 in its own) and ``nfdepth video`` says so; equal frames report nothing."""
+    frames = [np.asarray(f, np.float32) for f in scene.frames[:6]]
+    plain = list(depth_from_video(frames, camera=scene.camera, velocity=STEP))
+    assert all(r.exposure is None for r in plain)
+    frames[3] = np.float32(1.2) * frames[3]
+    lit = {r.index: r.exposure for r in depth_from_video(frames, camera=scene.camera, velocity=STEP)}
+    assert lit[1] is None
+    assert lit[2][0] is None and lit[2][1][0] == pytest.approx(1.2, rel=0.01)
+    assert lit[3][0][0] == pytest.approx(1 / 1.2, rel=0.01) and lit[3][1][0] == pytest.approx(1 / 1.2, rel=0.01)
+    assert lit[4][0][0] == pytest.approx(1.2, rel=0.01) and lit[4][1] is None
+    folder = tmp_path / "lit"
+    folder.mkdir()
+    for k, frame in enumerate(frames):
+        assert cv2.imwrite(str(folder / f"f{k}.png"), np.round(np.clip(frame, 0, 320) * 200).astype(np.uint16))
+    code = main(["video", str(folder / "*.png"), "--rig", str(rail_rig), "--out", str(tmp_path / "v.npz"), "--quiet"])
+    printed, err = capsys.readouterr()
+    assert code == 0, err
+    assert re.search(r", exposure matched in 3 triples \(frames 2, 3, 4; gains 0\.8\d\d?\.\.1\.2\d?\) -> ", printed), printed

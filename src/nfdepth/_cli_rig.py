@@ -364,9 +364,12 @@ def _cmd_video(args) -> int:
     results = []
     written = 0
     last = None
+    matched = []  # (frame, gains) of the triples whose outer frames' exposures were undone
     try:
         for res in depth_from_video(counted(), rig=rig, **options):
             last = res
+            if res.exposure is not None:
+                matched.append((res.index, [fit[0] for fit in res.exposure if fit is not None]))
             if kind == "npz":
                 results.append(res)
             else:
@@ -384,7 +387,14 @@ def _cmd_video(args) -> int:
         written = len(results)
     if last is not None:
         write_figures(figures, last.depth, last.depth_std, title=f"frame {last.index} (fused)", unit=args.unit)
-    print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple) -> {out}")
+    note = ""
+    if matched:
+        gains = [g for _, gs in matched for g in gs]
+        note = (
+            f", exposure matched in {len(matched)} triple{'s' if len(matched) > 1 else ''} (frames"
+            f" {', '.join(str(k) for k, _ in matched[:8])}{', ...' if len(matched) > 8 else ''}; gains {min(gains):.3g}..{max(gains):.3g})"
+        )
+    print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple){note} -> {out}")
     return 0
 
 

@@ -213,6 +213,33 @@ def dense_prior(frames, camera: PinholeCamera, translation, *, levels: int, oute
     return rho
 
 
+def coarse_motion_px(window, camera: PinholeCamera, translation, mask, *, outer_steps=None) -> float:
+    """Median image motion (full-resolution px per central step) at the cells ``mask`` of the middle frame, or 0 below 10 cells.
+
+    From :func:`dense_prior` on the frames reduced to a quarter (at most;
+    the shorter side kept at 32 px or more): the single level's own normal
+    flow aliases beyond about 2 px and reads a motion of 10 px as 1-2 px,
+    so it cannot say that it was too fast.
+    """
+    down = 0
+    while down < 2 and (min(window[1].shape) >> (down + 1)) >= 32:
+        down += 1
+    small = [np.asarray(f, np.float32) for f in window]
+    for _ in range(down):
+        small = [cv2.pyrDown(f) for f in small]
+    s = 2.0**down
+    h, w = small[1].shape
+    cam = PinholeCamera(camera.focal_px / s, w, h, (camera.cx_px + 0.5) / s - 0.5, (camera.cy_px + 0.5) / s - 0.5)
+    from .stereo import auto_levels
+
+    prior = dense_prior(small, cam, translation, levels=auto_levels((h, w)), outer_steps=outer_steps)
+    motion = prior * np.hypot(*flow_directions(cam, translation, (h, w))) * np.float32(s)
+    rows, cols = np.nonzero(mask)
+    at = motion[np.minimum(rows // int(s), h - 1), np.minimum(cols // int(s), w - 1)]
+    at = np.abs(at[np.isfinite(at)])
+    return float(np.median(at)) if at.size >= 10 else 0.0
+
+
 def _step_span(motion: np.ndarray, reach_px: int) -> np.ndarray:
     """Largest minus smallest ``motion`` within ``reach_px`` px (a square window): the step around each pixel."""
     kernel = np.ones((2 * reach_px + 1, 2 * reach_px + 1), np.uint8)

@@ -94,7 +94,7 @@ from scipy.spatial.transform import Rotation
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
 from ._exposure import match_camera_exposure, match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
-from ._translating_pyramid import edge_depth_coarse_to_fine, outer_reach
+from ._translating_pyramid import coarse_motion_px, edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
 from .camera import PinholeCamera
 from .depth import Reason
@@ -276,6 +276,11 @@ class VideoDepthFrame:
         inverse depth and its std at every pixel static stereo measures
         (NaN elsewhere; not fused over time). Pixel-centred, unlike the
         maps above (:mod:`nfdepth._dense_video`). None without ``dense``.
+    exposure : tuple or None
+        The exposures undone before this frame's triple was measured
+        (``match_exposure``): ``(before, after)``, each the outer frame's
+        ``(gain, offset)`` against this frame (``I_outer = gain I + offset``)
+        or None where it was taken as it is; None where neither was changed.
     """
 
     index: int
@@ -288,6 +293,7 @@ class VideoDepthFrame:
     baseline: float
     dense_inverse_depth: np.ndarray | None = None
     dense_inverse_depth_std: np.ndarray | None = None
+    exposure: tuple | None = None
 
     @property
     def depth(self) -> np.ndarray:
@@ -911,6 +917,7 @@ def depth_from_video(
 
         shape = cam.shape
         rho_m = np.full(shape, np.nan)
+        exposure = None
         var_m = np.full(shape, np.nan)
         dense_maps = (np.full(shape, np.nan, np.float32), np.full(shape, np.nan, np.float32)) if dense else (None, None)
         if moves:
@@ -920,7 +927,8 @@ def depth_from_video(
                 # the noise of the frames as taken (turning or warping resamples the outer ones and hides part of it)
                 edge_options = {"sigma_px": sigma_px, "stencil": stencil, "min_cos": min_cos, "noise_std": noise_std if noise_std is not None else float(np.median(noises))}
                 # the outer frames on the middle one's exposure (the same frames where they share it)
-                matched = match_frame_exposures(window, cam, rotations, (p_prev, p_mid, p_next), middle=1, threads=threads)[0] if match_exposure else window
+                matched, undone = match_frame_exposures(window, cam, rotations, (p_prev, p_mid, p_next), middle=1, threads=threads) if match_exposure else (window, [None] * 3)
+                exposure = None if undone[0] is None and undone[2] is None else (undone[0], undone[2])
                 # a turning camera's outer frames are first turned to the middle one's orientation: a translating triple
                 triple, whole = _turned_triple(matched, cam, rotations, sigma_px=sigma_px) if turns else (matched, None)
                 outer = _outer_steps(rmat, (p_prev, p_mid, p_next), step_cam)
@@ -949,6 +957,8 @@ def depth_from_video(
             # farthest from the middle one (the flow is per central step: a reversing camera moves farther)
             median = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
             shift = median * outer_reach(-step_cam, outer)
+            if levels == 1:  # that flow aliases beyond the range and reads a fast motion as slow: the pyramid's prior says
+                shift = max(shift, coarse_motion_px(triple, cam, -step_cam, mask, outer_steps=outer) * outer_reach(-step_cam, outer))
             if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
@@ -1031,6 +1041,7 @@ def depth_from_video(
             baseline=baseline,
             dense_inverse_depth=dense_maps[0],
             dense_inverse_depth_std=dense_maps[1],
+            exposure=exposure,
         )
 
     rounding = (
@@ -1099,7 +1110,7 @@ def depth_from_video(
             f" that line ({_off_line_effect(bent, bent_ahead)})"
             if dense_frames_before == 1
             else f"in {len(bent_frames)} of {triples} frames ({_frame_list(bent_frames)}) the positions of a dense map's"
-            f" {dense_frames_before + 2} frames lie up to {100 * bent:.0f} % of the mean step off the line through the first"
+            f" frames (up to {dense_frames_before + 2}; fewer at the start) lie up to {100 * bent:.0f} % of the mean step off the line through the first"
             f" and last of them: the dense maps take them as on that line ({_off_line_effect(bent, bent_ahead)});"
             " fewer frames (dense_frames_before) follow a curved path better",
             UserWarning,
