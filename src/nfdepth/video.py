@@ -79,6 +79,7 @@ relative to the reference one at the crossings (the same at every crossing),
 from __future__ import annotations
 
 import glob as _glob
+import inspect
 import math
 import os
 import re
@@ -106,6 +107,7 @@ from .pipelines import (
     _DISPLACEMENT_WARNING,
     EdgeDepth,
     _median_displacement,
+    dynamic_stereo,
     static_stereo_edges,
 )
 from .rig import MAX_TURN_DEG, Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
@@ -1295,12 +1297,63 @@ def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean"
     return [m[0], r[0], _shared(m[1], r[1], shared), r[2], m[2]]
 
 
-def _registration_residual(moving_c, reference_c, result: EdgeDepth) -> tuple[float, float]:
-    noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
-    if len(result) == 0:
-        return 0.0, noise
+#: dynamic_stereo's own smoothing (the reach around a clipped plateau is twice it)
+_DYNAMIC_SIGMA_PX = float(inspect.signature(dynamic_stereo).parameters["sigma_px"].default)
+
+
+def _plateaus(img) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels at ``img``'s own highest and lowest value, each where at least 0.1 % of them hold it (a clipped plateau), else none."""
+    lo, hi = float(img.min()), float(img.max())
+    none = np.zeros(np.shape(img), bool)
+    if not hi > lo:
+        return none, none
+    top, bottom = img >= hi, img <= lo
+    return (top if top.mean() >= 1e-3 else none), (bottom if bottom.mean() >= 1e-3 else none)
+
+
+def _clipped_apart(moving_c, reference_c, exposure, reach_px: int) -> np.ndarray:
+    """Pixels within ``reach_px`` of a plateau that one camera's exposure clipped and the other's did not.
+
+    ``exposure``: ``(g, o)`` with ``R = g M + o`` (None: equal). A pixel on
+    one frame's top (bottom) plateau is clipped there when the other frame,
+    mapped to its exposure, lies above (below) that plateau by more than a
+    grey level: its intensities are not the other camera's, matched or
+    not, and the normal flows of its frames are wrong. Plateaus both
+    cameras share at one exposure (a white background) are the scene's.
+    """
+    g, o = exposure if exposure is not None else (1.0, 0.0)
+    m = moving_c.astype(np.float64)
+    r = reference_c.astype(np.float64)
+    (m_top, m_bottom), (r_top, r_bottom) = _plateaus(m), _plateaus(r)
+    r_seen, m_seen = g * m + o, (r - o) / g  # each frame as the other camera would have taken it
+    out = (r_top & (r_seen > r.max() + 1.0)) | (r_bottom & (r_seen < r.min() - 1.0))
+    out |= (m_top & (m_seen > m.max() + 1.0)) | (m_bottom & (m_seen < m.min() - 1.0))
+    if out.any() and reach_px > 0:
+        out = cv2.dilate(out.astype(np.uint8), np.ones((2 * reach_px + 1, 2 * reach_px + 1), np.uint8)).astype(bool)
+    return out
+
+
+def _drop_points(result: EdgeDepth, where: np.ndarray) -> None:
+    """Mark the determinable edge points of ``result`` whose pixel lies in ``where`` UNCERTAIN (NaN), in place."""
+    inv = result.inverse_depth
     ii = np.floor(result.rows).astype(np.int64)
     jj = np.floor(result.cols).astype(np.int64)
+    drop = (inv.reason == Reason.OK) & where[ii, jj]
+    inv.reason[drop] = Reason.UNCERTAIN
+    inv.rho[drop] = np.nan
+    inv.rho_std[drop] = np.nan
+
+
+def _registration_residual(moving_c, reference_c, result: EdgeDepth, clipped=None) -> tuple[float, float]:
+    """RMS difference of the two cameras' frames at the crossing at the edge points (not those near ``clipped`` pixels), and the noise."""
+    noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
+    ii = np.floor(result.rows).astype(np.int64)
+    jj = np.floor(result.cols).astype(np.int64)
+    if clipped is not None:  # a clipped highlight differs between exposures whatever the poses
+        keep = ~clipped[ii, jj]
+        ii, jj = ii[keep], jj[keep]
+    if ii.size == 0:
+        return 0.0, noise
     diff = moving_c.astype(np.float64)[ii, jj] - reference_c.astype(np.float64)[ii, jj]
     return float(np.sqrt(np.mean(diff**2))), noise
 
@@ -1395,7 +1448,11 @@ def dynamic_stereo_from_videos(
             r_used, exposure = match_camera_exposure(m_win[2], r_win, at=2) if match_exposure else (r_win, None)  # R[c] against M[c]
             frames = interleaved_frames(m_win, r_used, 2, shared=shared)  # window index 2 is frame c
             result = dynamic_stereo_from_rig(frames, rig, **options)
-            residual, noise = _registration_residual(m_win[2], r_used[2], result)
+            reach = int(np.ceil(2.0 * float(options.get("sigma_px", _DYNAMIC_SIGMA_PX))))  # the smoothing spreads a plateau's edge this far
+            apart = _clipped_apart(m_win[2], r_win[2], exposure, reach)
+            if apart.any():  # the edge points beside one camera's clipped highlights: wrong flows, UNCERTAIN
+                _drop_points(result, apart)
+            residual, noise = _registration_residual(m_win[2], r_used[2], result, apart)
             if residual > _MISMATCH_FACTOR * noise + 1.0:
                 warnings.warn(
                     f"crossing {c}: the two cameras' frames {c} differ by {residual:.3g} grey levels (RMS at the edge points; "
