@@ -1809,10 +1809,12 @@ def static_stereo(
         Smallest and largest disparity to search (px per unit position, as
         the output), like StereoSGBM's ``minDisparity`` / ``numDisparities``:
         the cost volume searches this range and 1 px beyond it at
-        ``cost_step_px`` (coarser past 512 candidates, with a warning), a
-        best match at the outer end is ``UNCERTAIN`` (its match lies outside
-        the range), and the coarse-to-fine pyramid is skipped (``levels`` is
-        then 1). Clipped to the disparities that leave a pixel in a view; a
+        ``cost_step_px`` (coarser past 512 candidates, with a warning). It
+        bounds the output: a best match more than half a step beyond it, or
+        a final value more than :data:`_BOUND_STEPS` steps beyond it, is
+        ``UNCERTAIN`` (the scene lies outside the range; a warning says so
+        when that is most of it). The coarse-to-fine pyramid is skipped
+        (``levels`` is then 1). Clipped to the disparities that leave a pixel in a view; a
         range narrower than two steps is a ``ValueError``. Default: found
         automatically (module docstring, step 3d). Needs ``cost_volume=True``.
     threads : int, optional
