@@ -412,7 +412,8 @@ class CalibratedRowDepth:
     unknown, or seen by no other view); ``row``: the
     :class:`RectifiedRow`; ``result``: static stereo's
     :class:`nfdepth.stereo.StereoResult` on it (as ``disparity``, before
-    that last test).
+    that last test); ``depth_range``: the ``(near, far)`` that bounds
+    ``depth`` and its fill, or None.
     """
 
     depth: np.ndarray
@@ -421,6 +422,7 @@ class CalibratedRowDepth:
     disparity: np.ndarray
     row: RectifiedRow
     result: object
+    depth_range: tuple | None = None
 
     def filled(self) -> tuple[np.ndarray, np.ndarray]:
         """The depth with its holes filled from the background, and where it was filled.
@@ -431,7 +433,7 @@ class CalibratedRowDepth:
         measurements: ``depth_std`` has none there, and the returned mask
         marks them. Returns float32 depth (NaN where the rectified line has
         no value at all or the reference's pixel lies off the rectified
-        canvas) and the bool mask of filled pixels.
+        canvas, or beyond ``depth_range``) and the bool mask of filled pixels.
         """
         from .stereo import fill_background
 
@@ -439,6 +441,9 @@ class CalibratedRowDepth:
         with np.errstate(divide="ignore", invalid="ignore"):
             z = np.where(d > 0, self.row.focal_px / d.astype(np.float64), np.nan)
         depth = self.row.to_reference(z)
+        if self.depth_range is not None:  # a fill is no excuse to leave the range
+            with np.errstate(invalid="ignore"):
+                depth[(depth < self.depth_range[0]) | (depth > self.depth_range[1])] = np.nan
         measured = np.isfinite(self.depth)
         depth = np.where(measured, self.depth, depth).astype(np.float32)
         return depth, ~measured & np.isfinite(depth)
@@ -536,7 +541,13 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         _warn_if_mostly_beyond(int(np.count_nonzero(beyond)), int(np.count_nonzero(np.isfinite(depth))), f"depth_range ({depth_range[0]:g}, {depth_range[1]:g})")
     edges = row.to_reference(np.where(res.edge_mask & usable, 1.0, np.nan))
     return CalibratedRowDepth(
-        depth=depth, depth_std=depth_std, edge_mask=np.isfinite(edges) & np.isfinite(depth), disparity=np.where(usable, d, np.nan).astype(np.float32), row=row, result=res
+        depth=depth,
+        depth_std=depth_std,
+        edge_mask=np.isfinite(edges) & np.isfinite(depth),
+        disparity=np.where(usable, d, np.nan).astype(np.float32),
+        row=row,
+        result=res,
+        depth_range=depth_range,
     )
 
 
