@@ -595,7 +595,10 @@ def _cmd_stereo(args) -> int:
     std = result.uncertainty
     unit = "px"
     if focal is not None:
-        values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        values = unbounded = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        if depth_range is not None:  # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
+            with np.errstate(invalid="ignore"):
+                values = np.where((values >= depth_range[0]) & (values <= depth_range[1]), values, np.nan)
         with np.errstate(divide="ignore", invalid="ignore"):
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)
@@ -623,9 +626,13 @@ def _cmd_stereo(args) -> int:
     notes = ""
     if filled is not None:
         notes += f", {int(np.count_nonzero(filled & valid))} filled"
-        beyond = int(np.count_nonzero(filled & ~valid & np.isfinite(result.disparity)))
-        if beyond:  # a fill from a background at zero disparity (or measured just below it) has no finite depth
-            notes += f" ({beyond} more filled at a disparity of 0 or less: no finite depth, NaN)"
+        if focal is not None:
+            infinite = int(np.count_nonzero(filled & np.isfinite(result.disparity) & ~np.isfinite(unbounded)))
+            outside = int(np.count_nonzero(filled & np.isfinite(unbounded) & ~valid))
+            if infinite:  # a fill from a background at zero disparity (or measured just below it) has no finite depth
+                notes += f" ({infinite} more filled at a disparity of 0 or less: no finite depth, NaN)"
+            if outside:
+                notes += f" ({outside} more filled beyond --depth-range: NaN)"
     if result.search_range_px is not None:
         notes += f", searched {result.search_range_px[0]:g}..{result.search_range_px[1]:g} px"
     if column:
