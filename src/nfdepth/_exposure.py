@@ -85,6 +85,23 @@ def _reduced(img: np.ndarray, down: int) -> np.ndarray:
     return img
 
 
+#: The quantiles of the exposure lines (percent).
+_QUANTILES = np.linspace(2.0, 98.0, 49)
+
+
+def _line(qx, qy) -> tuple[float, float]:
+    """The least-squares line ``qy ~ g qx + o`` through paired quantiles."""
+    a = np.stack([qx, np.ones_like(qx)], axis=1)
+    (g, o), *_ = np.linalg.lstsq(a, qy, rcond=None)
+    return float(g), float(o)
+
+
+def _unclipped(values, image) -> np.ndarray:
+    """Where ``values`` (intensities of ``image``) lie more than 1 % of its range from either end: not saturated."""
+    lo, hi = float(image.min()), float(image.max())
+    return (values > lo + 0.01 * (hi - lo)) & (values < hi - 0.01 * (hi - lo))
+
+
 def _exposure_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     """``y ~ g x + o`` for two images' intensities over the same scene points: the line through their quantiles.
 
@@ -95,11 +112,7 @@ def _exposure_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     so neither matters, and a few occluded or wrong pixels move them
     little.
     """
-    q = np.linspace(2.0, 98.0, 49)
-    qx, qy = np.percentile(x, q), np.percentile(y, q)
-    a = np.stack([qx, np.ones_like(qx)], axis=1)
-    (g, o), *_ = np.linalg.lstsq(a, qy, rcond=None)
-    return float(g), float(o)
+    return _line(np.percentile(x, _QUANTILES), np.percentile(y, _QUANTILES))
 
 
 def _fit(views, ref, t, disparity_range_px, threads):
@@ -148,10 +161,7 @@ def _checked_fit(x, y, ref_image, image):
     ``ratio``: the pairs' median absolute difference after the fit against
     before (how much of it the fitted exposure leaves).
     """
-    r_lo, r_hi = float(ref_image.min()), float(ref_image.max())
-    v_lo, v_hi = float(image.min()), float(image.max())
-    keep = (x > r_lo + 0.01 * (r_hi - r_lo)) & (x < r_hi - 0.01 * (r_hi - r_lo))
-    keep &= (y > v_lo + 0.01 * (v_hi - v_lo)) & (y < v_hi - 0.01 * (v_hi - v_lo))
+    keep = _unclipped(x, ref_image) & _unclipped(y, image)
     if np.count_nonzero(keep) < _MIN_PAIRS:
         return None
     x, y = x[keep].astype(np.float64), y[keep].astype(np.float64)
@@ -170,17 +180,12 @@ def _global_line(ref_image, image):
     range ends are left out (clipped highlights and shadows); at least half
     must remain.
     """
-    q = np.linspace(2.0, 98.0, 49)
-    qx, qy = np.percentile(ref_image, q), np.percentile(image, q)
-    r_lo, r_hi = float(ref_image.min()), float(ref_image.max())
-    v_lo, v_hi = float(image.min()), float(image.max())
-    keep = (qx > r_lo + 0.01 * (r_hi - r_lo)) & (qx < r_hi - 0.01 * (r_hi - r_lo))
-    keep &= (qy > v_lo + 0.01 * (v_hi - v_lo)) & (qy < v_hi - 0.01 * (v_hi - v_lo))
-    if np.count_nonzero(keep) < q.size // 2 or np.ptp(qx[keep]) <= 0:
+    qx, qy = np.percentile(ref_image, _QUANTILES), np.percentile(image, _QUANTILES)
+    keep = _unclipped(qx, ref_image) & _unclipped(qy, image)
+    if np.count_nonzero(keep) < _QUANTILES.size // 2 or np.ptp(qx[keep]) <= 0:
         return None
-    a = np.stack([qx[keep], np.ones(np.count_nonzero(keep))], axis=1)
-    (g, o), *_ = np.linalg.lstsq(a, qy[keep], rcond=None)
-    return (float(g), float(o)) if np.isfinite(g) and np.isfinite(o) and g > 0 else None
+    g, o = _line(qx[keep], qy[keep])
+    return (g, o) if np.isfinite(g) and np.isfinite(o) and g > 0 else None
 
 
 def _gross_prematch(images, ref: int, total) -> None:
@@ -266,7 +271,6 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
     gives no dense map (along the optical axis) are left as they are.
     """
     from ._dense_video import dense_row
-    from .camera import PinholeCamera
 
     frames = [np.asarray(f, np.float32) for f in frames]
     total = [(1.0, 0.0)] * len(frames)
@@ -276,7 +280,7 @@ def match_frame_exposures(frames, camera, rotations, positions, *, middle: int, 
     for _ in range(_ROUNDS):
         small = [_reduced(f, down) for f in frames]
         h, w = small[middle].shape
-        cam = PinholeCamera(camera.focal_px / scale, w, h, (camera.cx_px + 0.5) / scale - 0.5, (camera.cy_px + 0.5) / scale - 0.5)
+        cam = camera.reduced(scale, (h, w))
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

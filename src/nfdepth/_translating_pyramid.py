@@ -229,7 +229,7 @@ def coarse_motion_px(window, camera: PinholeCamera, translation, mask, *, outer_
         small = [cv2.pyrDown(f) for f in small]
     s = 2.0**down
     h, w = small[1].shape
-    cam = PinholeCamera(camera.focal_px / s, w, h, (camera.cx_px + 0.5) / s - 0.5, (camera.cy_px + 0.5) / s - 0.5)
+    cam = camera.reduced(s, (h, w))
     from .stereo import auto_levels
 
     prior = dense_prior(small, cam, translation, levels=auto_levels((h, w)), outer_steps=outer_steps)

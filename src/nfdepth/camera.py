@@ -138,6 +138,14 @@ class PinholeCamera:
         """The 3 x 3 intrinsic matrix ``K`` (OpenCV's camera matrix: ``(col, row, 1) ~ K (X, Y, Z)``)."""
         return np.array([[self.focal_px, 0.0, self.cx_px], [0.0, self.focal_px, self.cy_px], [0.0, 0.0, 1.0]])
 
+    def reduced(self, factor: float, shape) -> PinholeCamera:
+        """This camera for its image reduced ``factor`` times to ``shape`` ``(rows, cols)`` (e.g. ``cv2.pyrDown``).
+
+        Pixel centres map as ``c' = (c + 0.5) / factor - 0.5``.
+        """
+        h, w = shape
+        return PinholeCamera(self.focal_px / factor, w, h, (self.cx_px + 0.5) / factor - 0.5, (self.cy_px + 0.5) / factor - 0.5)
+
     def to_normalized(self, rows, cols):
         """Pixel ``(row, col)`` to normalised image coordinates ``(x, y)``."""
         x = (np.asarray(cols, dtype=float) - self.cx_px) / self.focal_px

@@ -442,8 +442,7 @@ class CalibratedRowDepth:
             z = np.where(d > 0, self.row.focal_px / d.astype(np.float64), np.nan)
         depth = self.row.to_reference(z)
         if self.depth_range is not None:  # a fill is no excuse to leave the range
-            with np.errstate(invalid="ignore"):
-                depth[(depth < self.depth_range[0]) | (depth > self.depth_range[1])] = np.nan
+            depth[_beyond_depths(depth, self.depth_range)] = np.nan
         measured = np.isfinite(self.depth)
         depth = np.where(measured, self.depth, depth).astype(np.float32)
         return depth, ~measured & np.isfinite(depth)
@@ -469,6 +468,12 @@ def _depth_points(camera: CalibratedCamera, depth, image):
     z = depth[rows, cols].astype(np.float64)
     pts = np.stack([xy[rows, cols, 0] * z, xy[rows, cols, 1] * z, z], axis=1).astype(np.float32)
     return pts, point_colors(image, rows, cols, depth.shape)
+
+
+def _beyond_depths(depth, depth_range) -> np.ndarray:
+    """Where ``depth`` lies outside ``depth_range`` ``(near, far)`` (NaN: not)."""
+    with np.errstate(invalid="ignore"):
+        return (depth < depth_range[0]) | (depth > depth_range[1])
 
 
 def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **stereo_options) -> CalibratedRowDepth:
@@ -534,8 +539,7 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         z_std = np.where(usable, row.focal_px * np.asarray(res.uncertainty, dtype=np.float64) / d**2, np.nan)
     depth, depth_std = row.to_reference(z, std=z_std)
     if depth_range is not None:  # the search covers the range along every ray: a bound on the depths themselves
-        with np.errstate(invalid="ignore"):
-            beyond = (depth < depth_range[0]) | (depth > depth_range[1])
+        beyond = _beyond_depths(depth, depth_range)
         depth[beyond] = np.nan
         depth_std[beyond] = np.nan
         _warn_if_mostly_beyond(int(np.count_nonzero(beyond)), int(np.count_nonzero(np.isfinite(depth))), f"depth_range ({depth_range[0]:g}, {depth_range[1]:g})")

@@ -623,15 +623,18 @@ _LEAST_SEEN = 0.5
 _MAX_OFF_LINE = 0.02
 
 
-def _void_outside(res: EdgeDepth, whole: np.ndarray) -> None:
-    """Edge points of ``res`` outside ``whole`` (a turned outer frame had nothing to read there) become ``NO_DATA``."""
+def _void_points(res: EdgeDepth, where: np.ndarray, reason: Reason, *, determinable_only: bool = False) -> None:
+    """The edge points of ``res`` whose pixel lies in ``where`` (all, or the determinable ones) get ``reason`` and NaN, in place."""
     inv = res.inverse_depth
-    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, whole.shape[0] - 1)
-    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, whole.shape[1] - 1)
-    void = ~whole[ii, jj]
-    inv.reason[void] = Reason.NO_DATA
+    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, where.shape[0] - 1)
+    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, where.shape[1] - 1)
+    void = where[ii, jj]
+    if determinable_only:
+        void &= inv.reason == Reason.OK
+    inv.reason[void] = reason
     inv.rho[void] = np.nan
     inv.rho_std[void] = np.nan
+
 
 
 #: With ``levels=1``: a median edge-point motion this many px larger one way than the other
@@ -950,7 +953,7 @@ def depth_from_video(
                     )
             mask = res.selection.mask
             if whole is not None:
-                _void_outside(res, whole)
+                _void_points(res, ~whole, Reason.NO_DATA)  # a turned outer frame had nothing to read there
                 if whole.mean() < _LEAST_SEEN:
                     blind_frames.append(k)
                     seen = min(seen, float(whole.mean()))
@@ -958,9 +961,10 @@ def depth_from_video(
             # the motion the triple's stencil saw (after warping by the prior, with levels > 1), in the outer frame
             # farthest from the middle one (the flow is per central step: a reversing camera moves farther)
             median = _median_displacement(mask, res.flows["relative" if levels == 1 else "residual"])
-            shift = median * outer_reach(-step_cam, outer)
+            moved_px = median
             if levels == 1:  # that flow aliases beyond the range and reads a fast motion as slow: the pyramid's prior says
-                shift = max(shift, coarse_motion_px(triple, cam, -step_cam, mask, outer_steps=outer) * outer_reach(-step_cam, outer))
+                moved_px = max(median, coarse_motion_px(triple, cam, -step_cam, mask, outer_steps=outer))
+            shift = moved_px * outer_reach(-step_cam, outer)
             if shift > _DIFFERENTIAL_RANGE_PX:
                 fast_frames.append(k)
                 fastest = max(fastest, shift)
@@ -1333,17 +1337,6 @@ def _clipped_apart(moving_c, reference_c, exposure, reach_px: int) -> np.ndarray
     return out
 
 
-def _drop_points(result: EdgeDepth, where: np.ndarray) -> None:
-    """Mark the determinable edge points of ``result`` whose pixel lies in ``where`` UNCERTAIN (NaN), in place."""
-    inv = result.inverse_depth
-    ii = np.floor(result.rows).astype(np.int64)
-    jj = np.floor(result.cols).astype(np.int64)
-    drop = (inv.reason == Reason.OK) & where[ii, jj]
-    inv.reason[drop] = Reason.UNCERTAIN
-    inv.rho[drop] = np.nan
-    inv.rho_std[drop] = np.nan
-
-
 def _registration_residual(moving_c, reference_c, result: EdgeDepth, clipped=None) -> tuple[float, float]:
     """RMS difference of the two cameras' frames at the crossing at the edge points (not those near ``clipped`` pixels), and the noise."""
     noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
@@ -1451,7 +1444,7 @@ def dynamic_stereo_from_videos(
             reach = int(np.ceil(2.0 * float(options.get("sigma_px", _DYNAMIC_SIGMA_PX))))  # the smoothing spreads a plateau's edge this far
             apart = _clipped_apart(m_win[2], r_win[2], exposure, reach)
             if apart.any():  # the edge points beside one camera's clipped highlights: wrong flows, UNCERTAIN
-                _drop_points(result, apart)
+                _void_points(result, apart, Reason.UNCERTAIN, determinable_only=True)
             residual, noise = _registration_residual(m_win[2], r_used[2], result, apart)
             if residual > _MISMATCH_FACTOR * noise + 1.0:
                 warnings.warn(
