@@ -132,8 +132,8 @@ def _cmd_dynamic(args) -> int:
     videos = [v for v in (args.moving_video, args.reference_video) if v is not None]
     if videos:
         return _cmd_dynamic_videos(args)
-    if args.crossings is not None or args.shared is not None or args.no_match_exposure:
-        raise CLIError("--crossings, --shared and --no-match-exposure go with --moving-video and --reference-video")
+    if args.crossings is not None or args.shared is not None:
+        raise CLIError("--crossings and --shared go with --moving-video and --reference-video")
     if len(args.images) != 5:
         raise CLIError(
             f"dynamic needs exactly 5 images I1 I2 I3 I4 I5 (I1, I3, I5 moving camera; I2, I3, I4 reference)"
@@ -146,7 +146,7 @@ def _cmd_dynamic(args) -> int:
     frames = [read_image(p) for p in args.images]
     for k, (p, f) in enumerate(zip(args.images, frames), 1):
         rig.check_image_shape(f.shape, what=f"I{k} '{Path(p).name}'")
-    result = dynamic_stereo_from_rig(frames, rig, **options)
+    result = dynamic_stereo_from_rig(frames, rig, match_exposure=not args.no_match_exposure, **options)
     hint = "give the rig's focal length and speeds in units that keep depths in that range"
     to_float32_map(result.depth[result.valid], what="a depth", hint=hint)  # the maps, the point cloud
     to_float32_map(result.depth_std[result.valid], what="a depth standard deviation", hint=hint)
@@ -170,7 +170,11 @@ def _cmd_dynamic(args) -> int:
         atomic_write(outs["csv"], lambda fh: fh.write(text.encode()), force=args.force)
     z = result.depth[ok]
     rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
-    print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}), range {rng_txt} -> {outs['out']}")
+    from .cli import _exposure_text
+
+    matched = "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(result.exposure or (), 1) if fit is not None)
+    matched = f", exposure matched to I3 ({matched})" if matched else ""
+    print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}), range {rng_txt}{matched} -> {outs['out']}")
     return 0
 
 
@@ -219,6 +223,8 @@ def _cmd_dynamic_videos(args) -> int:
         late = [c for c in (crossings or rig.motion.crossings) if c + 2 >= n]
         if late:
             raise CLIError(f"crossing {late[0]} needs frames {late[0] - 2}..{late[0] + 2}, but the videos have {n} frames (0..{n - 1})")
+    from .cli import _exposure_text
+
     results = []
     last = None
     options["match_exposure"] = not args.no_match_exposure
@@ -231,7 +237,7 @@ def _cmd_dynamic_videos(args) -> int:
         n = int(res.valid.sum())
         z = res.depth[res.valid]
         rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
-        matched = "" if res.exposure is None else f", the reference camera's exposure matched (gain {res.exposure[0]:.3g} offset {res.exposure[1]:+.3g})"
+        matched = "" if res.exposure is None else f", the reference camera's exposure matched ({_exposure_text(res.exposure)})"
         print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}{matched}")
         last = res
     if kind == "npz":
@@ -415,7 +421,8 @@ def register(sub, CLIError) -> None:
     p.add_argument(
         "--no-match-exposure",
         action="store_true",
-        help="with videos: take the two cameras' intensities as they are (default: the reference camera's frames are mapped onto the moving camera's exposure, from M[K] and R[K])",
+        help="take the images' intensities as they are (default: an image whose exposure differs from I3's is mapped onto it first;"
+        " with videos the reference camera's frames onto the moving camera's exposure, from M[K] and R[K], as well)",
     )
     p.add_argument("--rig", required=True, metavar="TOML", help="rig file with [camera] and [motion] (docs/rig-format.md)")
     p.add_argument("--out", required=True, metavar="OUT", help="depth at the edge points of I3: .pfm, .tif or .npy, NaN elsewhere;"

@@ -361,6 +361,12 @@ def _depth_range(value):
     return float(near), float(far)
 
 
+def _exposure_text(fit) -> str:
+    """``"gain 1.2 offset +10"`` for an undone ``(gain, offset)``: the offset in grey levels, whole ones from 100 up (16-bit images)."""
+    g, o = fit
+    return f"gain {g:.3g} offset {o:+.0f}" if abs(o) >= 100.0 else f"gain {g:.3g} offset {o:+.3g}"
+
+
 def _exposure_note(results) -> str:
     """``", exposure matched to the reference (...)"`` for the views whose exposure static stereo undid (``StereoResult.exposure``), or ``""``.
 
@@ -370,7 +376,7 @@ def _exposure_note(results) -> str:
     for label, result, names in results:
         for fit, name in zip(result.exposure or (), names):
             if fit is not None:
-                parts.append(f"{label}{Path(name).name} gain {fit[0]:.3g} offset {fit[1]:+.3g}")
+                parts.append(f"{label}{Path(name).name} {_exposure_text(fit)}")
     return f", exposure matched to the reference ({'; '.join(parts)})" if parts else ""
 
 

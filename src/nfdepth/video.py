@@ -93,7 +93,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
-from ._exposure import match_camera_exposure, match_frame_exposures
+from ._exposure import clipped_apart, match_camera_exposure, match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
 from ._translating_pyramid import coarse_motion_px, edge_depth_coarse_to_fine, outer_reach
 from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
@@ -107,6 +107,7 @@ from .pipelines import (
     _DISPLACEMENT_WARNING,
     EdgeDepth,
     _median_displacement,
+    _void_points,
     dynamic_stereo,
     static_stereo_edges,
 )
@@ -621,20 +622,6 @@ _LEAST_SEEN = 0.5
 #: from the line through the outer two is reported (with ``dense_frames_before`` > 1: any position of
 #: the dense map's frames, relative to their mean step, from the line through the first and last).
 _MAX_OFF_LINE = 0.02
-
-
-def _void_points(res: EdgeDepth, where: np.ndarray, reason: Reason, *, determinable_only: bool = False) -> None:
-    """The edge points of ``res`` whose pixel lies in ``where`` (all, or the determinable ones) get ``reason`` and NaN, in place."""
-    inv = res.inverse_depth
-    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, where.shape[0] - 1)
-    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, where.shape[1] - 1)
-    void = where[ii, jj]
-    if determinable_only:
-        void &= inv.reason == Reason.OK
-    inv.reason[void] = reason
-    inv.rho[void] = np.nan
-    inv.rho_std[void] = np.nan
-
 
 
 #: With ``levels=1``: a median edge-point motion this many px larger one way than the other
@@ -1305,38 +1292,6 @@ def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean"
 _DYNAMIC_SIGMA_PX = float(inspect.signature(dynamic_stereo).parameters["sigma_px"].default)
 
 
-def _plateaus(img) -> tuple[np.ndarray, np.ndarray]:
-    """The pixels at ``img``'s own highest and lowest value, each where at least 0.1 % of them hold it (a clipped plateau), else none."""
-    lo, hi = float(img.min()), float(img.max())
-    none = np.zeros(np.shape(img), bool)
-    if not hi > lo:
-        return none, none
-    top, bottom = img >= hi, img <= lo
-    return (top if top.mean() >= 1e-3 else none), (bottom if bottom.mean() >= 1e-3 else none)
-
-
-def _clipped_apart(moving_c, reference_c, exposure, reach_px: int) -> np.ndarray:
-    """Pixels within ``reach_px`` of a plateau that one camera's exposure clipped and the other's did not.
-
-    ``exposure``: ``(g, o)`` with ``R = g M + o`` (None: equal). A pixel on
-    one frame's top (bottom) plateau is clipped there when the other frame,
-    mapped to its exposure, lies above (below) that plateau by more than a
-    grey level: its intensities are not the other camera's, matched or
-    not, and the normal flows of its frames are wrong. Plateaus both
-    cameras share at one exposure (a white background) are the scene's.
-    """
-    g, o = exposure if exposure is not None else (1.0, 0.0)
-    m = moving_c.astype(np.float64)
-    r = reference_c.astype(np.float64)
-    (m_top, m_bottom), (r_top, r_bottom) = _plateaus(m), _plateaus(r)
-    r_seen, m_seen = g * m + o, (r - o) / g  # each frame as the other camera would have taken it
-    out = (r_top & (r_seen > r.max() + 1.0)) | (r_bottom & (r_seen < r.min() - 1.0))
-    out |= (m_top & (m_seen > m.max() + 1.0)) | (m_bottom & (m_seen < m.min() - 1.0))
-    if out.any() and reach_px > 0:
-        out = cv2.dilate(out.astype(np.uint8), np.ones((2 * reach_px + 1, 2 * reach_px + 1), np.uint8)).astype(bool)
-    return out
-
-
 def _registration_residual(moving_c, reference_c, result: EdgeDepth, clipped=None) -> tuple[float, float]:
     """RMS difference of the two cameras' frames at the crossing at the edge points (not those near ``clipped`` pixels), and the noise."""
     noise = float(np.hypot(estimate_noise_std(moving_c), estimate_noise_std(reference_c)))
@@ -1440,9 +1395,9 @@ def dynamic_stereo_from_videos(
             c = pending.pop(0)
             r_used, exposure = match_camera_exposure(m_win[2], r_win, at=2) if match_exposure else (r_win, None)  # R[c] against M[c]
             frames = interleaved_frames(m_win, r_used, 2, shared=shared)  # window index 2 is frame c
-            result = dynamic_stereo_from_rig(frames, rig, **options)
+            result = dynamic_stereo_from_rig(frames, rig, match_exposure=match_exposure, **options)  # and each frame onto I3's
             reach = int(np.ceil(2.0 * float(options.get("sigma_px", _DYNAMIC_SIGMA_PX))))  # the smoothing spreads a plateau's edge this far
-            apart = _clipped_apart(m_win[2], r_win[2], exposure, reach)
+            apart = clipped_apart(m_win[2], r_win[2], exposure, reach)
             if apart.any():  # the edge points beside one camera's clipped highlights: wrong flows, UNCERTAIN
                 _void_points(result, apart, Reason.UNCERTAIN, determinable_only=True)
             residual, noise = _registration_residual(m_win[2], r_used[2], result, apart)
