@@ -277,7 +277,7 @@ def test_cli_disparity_range(plane_files, tmp_path, capsys):
     code = main(["stereo", *plane_files, "--disparity-range", "0", "40", "--out", str(out)])
     printed, err = capsys.readouterr()
     assert code == 0, err
-    assert "searched 0..40 px" in printed and "1 levels" in printed
+    assert "searched 0..40 px" in printed and ", 1 level," in printed
     lib = static_stereo([read_image(p) for p in plane_files], reference=1, disparity_range_px=(0, 40))
     np.testing.assert_array_equal(read_pfm(out), lib.disparity)
 
@@ -426,6 +426,31 @@ def test_cli_depth_range_bounds_the_depths_written(tmp_path, capsys):
     assert np.isfinite(z).mean() > 0.3 and not ((z < near) | (z > far)).any()
     np.testing.assert_array_equal(np.isfinite(m), np.isfinite(z))
     assert re.search(r"\(\d+ more filled beyond --depth-range: NaN\)", printed), printed
+
+
+def test_library_depth_range_bounds_the_depths():
+    """``StereoResult.depth(depth_range=)``: a range from :func:`disparity_range_for_depths` bounds the disparities to
+    0.1 px of its ends, so some depths lie just beyond it; with ``depth_range`` none do, and those inside are the same."""
+    from textured_planes import slanted_plane_views
+
+    from nfdepth.stereo import disparity_range_for_depths, static_stereo
+
+    views, _ = slanted_plane_views(3.0, 0.03, noise=2.0, min_wavelength_px=4.0)
+    scale = {"focal_px": 100.0, "baseline": 0.1}
+    everything = static_stereo(views, reference=1).depth(**scale)
+    near, far = (float(np.nanpercentile(everything, q)) for q in (20, 70))  # cuts through the plane
+    res = static_stereo(views, reference=1, disparity_range_px=disparity_range_for_depths((near, far), **scale))
+    loose = res.depth(**scale)
+    bounded = res.depth(**scale, depth_range=(near, far))
+    beyond = (loose < near) | (loose > far)
+    fb = scale["focal_px"] * scale["baseline"]
+    assert beyond.any() and fb / (fb / near + 0.1) * (1 - 1e-6) <= np.nanmin(loose) and np.nanmax(loose) <= fb / (fb / far - 0.1) * (1 + 1e-6)  # 0.1 px
+    assert not ((bounded < near) | (bounded > far)).any()
+    np.testing.assert_array_equal(bounded, np.where(beyond, np.nan, loose))
+    assert np.isfinite(bounded).mean() > 0.3
+    np.testing.assert_array_equal(res.depth(**scale, depth_range=(near, np.inf)), np.where(loose < near, np.nan, loose))
+    with pytest.raises(ValueError, match="depth_range"):
+        res.depth(**scale, depth_range=(far, near))
 
 
 def test_cli_fill_does_not_go_with_edges_only(plane_files, tmp_path, capsys):

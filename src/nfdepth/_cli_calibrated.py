@@ -120,6 +120,6 @@ def run_calibrated_stereo(args, CLIError) -> int:
     print(
         f"depth for view {reference} ({name}), rectified row of {len(views)} cameras (spacing {np.min(spacing):.3g}..{np.max(spacing):.3g} scene units, "
         f"farthest centre {np.max(line.row.off_line):.2g} off the line){notes}: {int(valid.sum())} of {valid.size} pixels ({100.0 * valid.mean():.1f} %), "
-        f"range {rng_txt}, {line.result.runtime_s:.2f} s, {line.result.levels} levels -> {outputs[0]}"
+        f"range {rng_txt}, {line.result.runtime_s:.2f} s, {line.result.levels} level{'s' if line.result.levels != 1 else ''} -> {outputs[0]}"
     )
     return 0

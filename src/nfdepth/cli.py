@@ -603,8 +603,7 @@ def _cmd_stereo(args) -> int:
     if focal is not None:
         values = unbounded = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
         if depth_range is not None:  # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
-            with np.errstate(invalid="ignore"):
-                values = np.where((values >= depth_range[0]) & (values <= depth_range[1]), values, np.nan)
+            values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset, depth_range=depth_range)
         with np.errstate(divide="ignore", invalid="ignore"):
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)
@@ -649,7 +648,7 @@ def _cmd_stereo(args) -> int:
         notes += _exposure_note([("", result, args.views)])
     print(
         f"{kind} for view {reference} ({Path(args.views[reference]).name}): {int(valid.sum())} of {valid.size} pixels"
-        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} levels{notes} -> {outputs[0]}"
+        f" ({100.0 * valid.mean():.1f} %), range {rng_txt}, {result.runtime_s:.2f} s, {result.levels} level{'s' if result.levels != 1 else ''}{notes} -> {outputs[0]}"
     )
     return EXIT_OK
 
