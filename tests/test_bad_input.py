@@ -639,8 +639,13 @@ def _cli_cases(tmp: Path, v):
     _write(tmp / "trunc.png", Path(v1).read_bytes()[:60])
     cv2.imwrite(str(tmp / "small.png"), np.zeros((16, 16), np.uint8))
     np.save(tmp / "map.npy", np.ones((4, 4)))
+    holed = cv2.imread(v1, cv2.IMREAD_GRAYSCALE).astype(np.float32)
+    holed[3:5, 2:7] = np.nan
+    np.save(tmp / "holed.npy", holed)
     out = str(tmp / "o.pfm")
     return [
+        # the library names only its index (views[1], frames[3]): the command line names the file
+        ("view with NaN", ["stereo", v0, str(tmp / "holed.npy"), v2, "--out", out], 2, "view 'holed.npy' contains 10 non-finite (NaN or inf) pixel(s); expected finite intensities"),
         ("one view", ["stereo", v0, "--out", out], 2, "stereo needs at least 2 views"),
         ("focal zero", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "0", "--baseline", "1"], 2, "--focal-px must be a positive number, got 0"),
         ("focal negative", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "-10", "--baseline", "1"], 2, "--focal-px must be a positive number, got -10"),

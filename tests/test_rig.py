@@ -463,6 +463,16 @@ def test_dynamic_cli_errors(tmp_path, capsys, paper_pngs, rig_text, n_images, co
     assert not (tmp_path / "z.tif").exists()
 
 
+def test_dynamic_cli_names_an_image_with_nan(tmp_path, capsys, paper_pngs):
+    holed = cv2.imread(str(paper_pngs[3]), cv2.IMREAD_UNCHANGED).astype(np.float32)
+    holed[10:20, 10:20] = np.nan
+    np.save(tmp_path / "I4.npy", holed)
+    images = [*paper_pngs[:3], tmp_path / "I4.npy", paper_pngs[4]]
+    code, _, err = run_cli(capsys, "dynamic", *images, "--rig", PAPER_RIG, "--out", tmp_path / "z.tif")
+    assert code == 2 and err.strip() == "nfdepth: error: I4 'I4.npy' contains 100 non-finite (NaN or inf) pixel(s); expected finite intensities", err  # was: frames[3] ...
+    assert not (tmp_path / "z.tif").exists()
+
+
 def test_dynamic_cli_missing_rig(tmp_path, capsys, paper_pngs):
     code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", tmp_path / "nope.toml", "--out", tmp_path / "z.tif")
     assert code == 3 and "nope.toml" in err and err.count("\n") == 1

@@ -998,4 +998,4 @@ def test_the_frames_whose_exposure_was_undone_are_reported(scene, tmp_path, caps
     code = main(["video", str(folder / "*.png"), "--rig", str(rail_rig), "--out", str(tmp_path / "v.npz"), "--quiet"])
     printed, err = capsys.readouterr()
     assert code == 0, err
-    assert re.search(r", exposure matched in 3 triples \(frames 2, 3, 4; gains 0\.8\d\d?\.\.1\.2\d?\) -> ", printed), printed
+    assert re.search(r", exposure matched in 3 triples \(frames 2, 3, 4; gains 0\.8\d\d?\.\.1\.2\d?, offsets -\d+(\.\d+)?\.\.\+\d+(\.\d+)?\) -> ", printed), printed  # offsets in the files' 16-bit levels

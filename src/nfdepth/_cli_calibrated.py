@@ -24,6 +24,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
     """The ``--cameras`` branch of ``nfdepth stereo``: depth (scene units) in the reference camera's own pixels."""
     from ._cli_rig import write_figures
     from .cli import (
+        _check_finite,
         _depth_range,
         _exposure_note,
         _positive,
@@ -67,6 +68,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
     outputs, figures = _stereo_outputs(args, [*args.views, *column, args.cameras, args.column_cameras])
     views = [read_image(v) for v in args.views]
     column_views = [read_image(v) for v in column]
+    _check_finite([*args.views, *column], [*views, *column_views])
     for what, paths, imgs, cams, source in (("view", args.views, views, cameras, args.cameras), ("column view", column, column_views, column_cameras, args.column_cameras)):
         for k, (path, view, cam) in enumerate(zip(paths, imgs, cams)):
             if view.shape != cam.shape:

@@ -144,6 +144,9 @@ def _cmd_dynamic(args) -> int:
     rig = load_rig(args.rig)
     rig.relative_motion()  # a missing [motion] fails before any image is read
     frames = [read_image(p) for p in args.images]
+    from .cli import _check_finite
+
+    _check_finite(args.images, frames, label=lambda k, path: f"I{k + 1} '{Path(path).name}'")
     for k, (p, f) in enumerate(zip(args.images, frames), 1):
         rig.check_image_shape(f.shape, what=f"I{k} '{Path(p).name}'")
     result = dynamic_stereo_from_rig(frames, rig, match_exposure=not args.no_match_exposure, **options)
@@ -238,13 +241,16 @@ def _cmd_dynamic_videos(args) -> int:
         z = res.depth[res.valid]
         rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
         matched = "" if res.exposure is None else f", the reference camera's exposure matched ({_exposure_text(res.exposure)})"
+        images = "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(res.result.exposure or (), 1) if fit is not None)
+        matched += f", images matched to I3 ({images})" if images else ""
         print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}{matched}")
         last = res
     if kind == "npz":
         write_crossings_npz(results, out, camera=rig.camera, force=args.force)
     if last is not None:
         write_figures(outs, last.depth, last.depth_std, title=f"crossing {last.index}", unit=args.unit)
-    print(f"depth at {len(crossings or rig.motion.crossings)} crossings -> {out}")
+    count = len(crossings or rig.motion.crossings)
+    print(f"depth at {count} crossing{'s' if count != 1 else ''} -> {out}")
     return 0
 
 
@@ -370,12 +376,12 @@ def _cmd_video(args) -> int:
     results = []
     written = 0
     last = None
-    matched = []  # (frame, gains) of the triples whose outer frames' exposures were undone
+    matched = []  # (frame, fits) of the triples whose outer frames' exposures were undone
     try:
         for res in depth_from_video(counted(), rig=rig, **options):
             last = res
             if res.exposure is not None:
-                matched.append((res.index, [fit[0] for fit in res.exposure if fit is not None]))
+                matched.append((res.index, [fit for fit in res.exposure if fit is not None]))
             if kind == "npz":
                 results.append(res)
             else:
@@ -395,10 +401,14 @@ def _cmd_video(args) -> int:
         write_figures(figures, last.depth, last.depth_std, title=f"frame {last.index} (fused)", unit=args.unit)
     note = ""
     if matched:
-        gains = [g for _, gs in matched for g in gs]
+        from .cli import _offset_text
+
+        gains = [fit[0] for _, fits in matched for fit in fits]
+        offsets = [fit[1] for _, fits in matched for fit in fits]
+        shown = f", offsets {_offset_text(min(offsets))}..{_offset_text(max(offsets))}" if max(abs(o) for o in offsets) >= 0.005 else ""
         note = (
             f", exposure matched in {len(matched)} triple{'s' if len(matched) > 1 else ''} (frames"
-            f" {', '.join(str(k) for k, _ in matched[:8])}{', ...' if len(matched) > 8 else ''}; gains {min(gains):.3g}..{max(gains):.3g})"
+            f" {', '.join(str(k) for k, _ in matched[:8])}{', ...' if len(matched) > 8 else ''}; gains {min(gains):.3g}..{max(gains):.3g}{shown})"
         )
     print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple){note} -> {out}")
     return 0

@@ -312,6 +312,14 @@ def _path_keys(path) -> set:
     return keys
 
 
+def _check_finite(paths, images, label=lambda k, path: f"view '{Path(path).name}'") -> None:
+    """Refuse an image holding NaN or inf (a float TIFF, PFM or NPY), naming its file: the library names only its index."""
+    for k, (path, img) in enumerate(zip(paths, images)):
+        bad = int(np.count_nonzero(~np.isfinite(img)))
+        if bad:
+            raise CLIError(f"{label(k, path)} contains {bad} non-finite (NaN or inf) pixel(s); expected finite intensities")
+
+
 def _check_not_input(out, inputs, what: str = "--out") -> None:
     """Refuse, even with ``--force``, an output path that is one of the command's inputs (the same file or folder)."""
     if not inputs:
@@ -361,10 +369,14 @@ def _depth_range(value):
     return float(near), float(far)
 
 
+def _offset_text(o: float) -> str:
+    """An exposure's offset in grey levels: whole ones from 100 up (16-bit images), ``+0`` below 0.005 (not ``-3.02e-12``)."""
+    return f"{o:+.0f}" if abs(o) >= 100.0 else "+0" if abs(o) < 0.005 else f"{o:+.3g}"
+
+
 def _exposure_text(fit) -> str:
-    """``"gain 1.2 offset +10"`` for an undone ``(gain, offset)``: the offset in grey levels, whole ones from 100 up (16-bit images)."""
-    g, o = fit
-    return f"gain {g:.3g} offset {o:+.0f}" if abs(o) >= 100.0 else f"gain {g:.3g} offset {o:+.3g}"
+    """``"gain 1.2 offset +10"`` for an undone ``(gain, offset)`` (:func:`_offset_text`)."""
+    return f"gain {fit[0]:.3g} offset {_offset_text(fit[1])}"
 
 
 def _exposure_note(results) -> str:
@@ -534,6 +546,7 @@ def _cmd_stereo(args) -> int:
 
     views = [read_image(v) for v in args.views]
     column_views = [read_image(v) for v in column]
+    _check_finite([*args.views, *column], [*views, *column_views])
     shapes = {v.shape for v in views + column_views}
     if len(shapes) > 1:
         listed = ", ".join(f"{Path(p).name} {v.shape[1]}x{v.shape[0]}" for p, v in zip(args.views + column, views + column_views))
