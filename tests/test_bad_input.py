@@ -704,6 +704,8 @@ def _cli_cases(tmp: Path, v):
         ("demo out is a file", ["demo", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),
         ("unknown command", ["frobnicate"], 2, "invalid choice"),
         ("unknown option", ["stereo", v0, v1, "--out", out, "--bogus"], 2, "nfdepth: error: unrecognized arguments: --bogus"),
+        # `nfdepth video frames/*.png` unquoted: the shell hands over the files, the first taken as the video
+        ("unquoted glob", ["view", str(tmp / "map.npy"), v1, v2, "--out", str(tmp / "m2.png")], 2, f"unrecognized arguments: {v1} {v2}: quote a glob such as 'frames/*.png', or the shell expands it into files"),
         ("bad option value", ["stereo", v0, v1, "--out", out, "--axis", "z"], 2, "nfdepth: error: stereo: argument --axis: invalid choice: 'z'"),
     ]
 

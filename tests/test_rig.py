@@ -387,6 +387,8 @@ def test_dynamic_cli_end_to_end(tmp_path, capsys, paper_scene, paper_pngs):
     )
     assert code == 0, err
     assert "edge points of I3" in stdout
+    # the points without depth, by reason (the paper's pyramid: edges along the relative flow)
+    assert re.search(r"depth at \d+ of \d+ edge points of I3 \(I3\.png; \d+ undeterminable \(edges along the relative flow\)\), range ", stdout), stdout
     pts = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert pts.shape[0] > 300
     true = paper_scene.depth_at(pts[:, 0], pts[:, 1])

@@ -999,3 +999,22 @@ def test_the_frames_whose_exposure_was_undone_are_reported(scene, tmp_path, caps
     printed, err = capsys.readouterr()
     assert code == 0, err
     assert re.search(r", exposure matched in 3 triples \(frames 2, 3, 4; gains 0\.8\d\d?\.\.1\.2\d?, offsets -\d+(\.\d+)?\.\.\+\d+(\.\d+)?\) -> ", printed), printed  # offsets in the files' 16-bit levels
+
+
+def test_a_failed_video_run_removes_the_folder_it_made(tmp_path, capsys, sequence_dir, rail_rig):
+    """Frame 6 of a different size: the run fails after writing frames 1-4's maps into the --out folder it created.
+    It removes the maps and (new) the folder it made; a folder that was there before stays."""
+    frames = tmp_path / "cut"
+    frames.mkdir()
+    for k in range(N_FRAMES):
+        img = cv2.imread(str(sequence_dir / f"f{k}.png"), cv2.IMREAD_UNCHANGED)
+        assert cv2.imwrite(str(frames / f"f{k}.png"), img[:, :190] if k == 6 else img)
+    out = tmp_path / "maps"
+    code, _, err = run_cli(capsys, "video", frames, "--rig", rail_rig, "--out", out, "--quiet")
+    assert code == 2 and "does not match frame 6" in err and err.count("\n") == 1
+    assert err.strip().endswith(f"removed the 8 output(s) it had completed and the folder it made ({out})"), err
+    assert not out.exists()
+    out.mkdir()
+    code, _, err = run_cli(capsys, "video", frames, "--rig", rail_rig, "--out", out, "--quiet")
+    assert code == 2 and err.strip().endswith("removed the 8 output(s) it had completed"), err
+    assert out.is_dir() and not any(out.iterdir())

@@ -116,6 +116,22 @@ def _check_not_inputs(outs: dict, sources, extra=()) -> None:
         _check_not_input(out, inputs, _OUTPUT_OPTIONS.get(key, f"--{key}"))
 
 
+#: What each reason code of an edge point without depth means, for the run's line.
+_REASON_WORDS = {
+    3: "undeterminable (edges along the relative flow)",
+    4: "behind the camera or at infinity",
+    5: "uncertain",
+    6: "without data",
+}
+
+
+def _reasons_text(reasons) -> str:
+    """``"; 20 undeterminable (...), 5 uncertain"`` for the edge points without depth, by reason code; ``""`` for none."""
+    codes, counts = np.unique(np.asarray(reasons), return_counts=True)
+    parts = [f"{n} {_REASON_WORDS.get(int(c), f'reason {int(c)}')}" for c, n in sorted(zip(codes, counts), key=lambda cn: -cn[1])]
+    return f"; {', '.join(parts)}" if parts else ""
+
+
 def _cmd_dynamic(args) -> int:
     from .io import (
         atomic_write,
@@ -175,14 +191,17 @@ def _cmd_dynamic(args) -> int:
     rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
     from .cli import _exposure_text
 
+    without = _reasons_text(result.reason[~ok])
+
     matched = "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(result.exposure or (), 1) if fit is not None)
     matched = f", exposure matched to I3 ({matched})" if matched else ""
-    print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}), range {rng_txt}{matched} -> {outs['out']}")
+    print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}{without}), range {rng_txt}{matched} -> {outs['out']}")
     return 0
 
 
 def _cmd_dynamic_videos(args) -> int:
     """``nfdepth dynamic --moving-video M --reference-video R``: depth at each crossing instant."""
+    from .io import make_output_folder
     from .rig import check_crossings, load_rig
     from .video import (
         dynamic_stereo_from_videos,
@@ -235,7 +254,7 @@ def _cmd_dynamic_videos(args) -> int:
         if kind == "npz":
             results.append(res)
         else:
-            out.mkdir(exist_ok=True)
+            make_output_folder(out)
             write_video_frame(res, out, force=args.force)
         n = int(res.valid.sum())
         z = res.depth[res.valid]
@@ -326,6 +345,7 @@ def _video_output(args, CLIError):
 
 
 def _cmd_video(args) -> int:
+    from .io import make_output_folder
     from .rig import VideoSpec, load_poses, load_rig
     from .video import depth_from_video, read_video, write_video_frame, write_video_npz
 
@@ -385,7 +405,7 @@ def _cmd_video(args) -> int:
             if kind == "npz":
                 results.append(res)
             else:
-                out.mkdir(exist_ok=True)
+                make_output_folder(out)
                 write_video_frame(res, out, force=args.force)
                 written += 1
     except BaseException:

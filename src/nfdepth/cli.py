@@ -93,6 +93,12 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = _NEGATIVE_NUMBER  # (argparse's private hook; none of our options looks like a number)
 
     def error(self, message):  # one line, exit code 2, no usage dump
+        prefix = "unrecognized arguments: "
+        if message.startswith(prefix):
+            extra = message[len(prefix) :].split()
+            if len(extra) > 1 and all(Path(a).exists() for a in extra):  # an unquoted glob, expanded by the shell
+                listed = " ".join(extra[:3]) + (f" ... ({len(extra)} files)" if len(extra) > 3 else "")
+                message = f"{prefix}{listed}: quote a glob such as 'frames/*.png', or the shell expands it into files"
         raise CLIError(f"{self.prog}: {message}", EXIT_USAGE)
 
 
@@ -841,17 +847,24 @@ def _roll_back_outputs(event: str = "the interruption") -> str:
     """Remove the files this interrupted or failed run completed (the new ones); say what was done, for the one-line message."""
     from . import io
 
-    removed, replaced = [], []
-    for path, existed in io.COMPLETED_WRITES or ():
+    removed, replaced, folders = [], [], []
+    for path, existed in reversed(io.COMPLETED_WRITES or ()):  # a folder's files before the folder
         if existed:
             replaced.append(str(path))  # the old content is gone (--force): nothing to restore
             continue
         try:
-            path.unlink()
-            removed.append(str(path))
+            if path.is_dir():  # one this run made (io.make_output_folder): removed once empty
+                path.rmdir()
+                folders.append(str(path))
+            else:
+                path.unlink()
+                removed.append(str(path))
         except OSError:
             replaced.append(str(path))
+    replaced.reverse()
     note = f"; removed the {len(removed)} output(s) it had completed" if removed else ""
+    if folders:
+        note += f"{' and' if removed else '; removed'} the folder{'s' if len(folders) > 1 else ''} it made ({', '.join(reversed(folders))})"
     if replaced:
         note += f"; already written before {event}: {', '.join(replaced)}"
     return note

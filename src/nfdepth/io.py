@@ -50,6 +50,7 @@ __all__ = [
     "ARRAY_EXTENSIONS",
     "LUMA_WEIGHTS",
     "read_image",
+    "make_output_folder",
     "to_float32_map",
     "to_grey",
     "read_pfm",
@@ -391,6 +392,21 @@ def _kept_on_failure():
         yield
     finally:
         COMPLETED_WRITES = saved
+
+
+def make_output_folder(path) -> Path:
+    """The output folder ``path``, created if missing (its parent must exist).
+
+    During a command-line run a folder it creates is recorded in
+    :data:`COMPLETED_WRITES` with the files, so that a failed or
+    interrupted run removes it again once its own files are gone.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        path.mkdir()
+        if COMPLETED_WRITES is not None:
+            COMPLETED_WRITES.append((path, False))
+    return path
 
 
 def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool = False) -> Path:
