@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 
 import cv2
@@ -1018,3 +1019,45 @@ def test_a_failed_video_run_removes_the_folder_it_made(tmp_path, capsys, sequenc
     code, _, err = run_cli(capsys, "video", frames, "--rig", rail_rig, "--out", out, "--quiet")
     assert code == 2 and err.strip().endswith("removed the 8 output(s) it had completed"), err
     assert out.is_dir() and not any(out.iterdir())
+
+
+def test_a_blank_frame_is_named_and_not_measured(scene, tmp_path, capsys, rail_rig):
+    """Frame 4 of one value throughout (a dropped frame): before, its own triple warned of a textureless image without
+    naming it, and its neighbours' triples read the jump as motion and warned that the camera moves opposite to its
+    poses. Now one warning names the frame and the triples left unmeasured (3-5), which carry the fused depth."""
+    frames = [np.asarray(f, np.float32) for f in scene.frames]
+    frames[4] = np.full_like(frames[4], 128.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = {r.index: r for r in depth_from_video(frames, camera=scene.camera, velocity=STEP)}
+    messages = [str(w.message) for w in caught]
+    assert messages == [
+        (
+            "frame 4 holds one value throughout (a blank or dropped frame?): the triples of 3 of 7 frames (3-5) are not"
+            " measured and carry the fused depth of the frames before for up to 2 frames (max_age)"
+        )
+    ], messages
+    assert [k for k, r in results.items() if r.measured.any()] == [1, 2, 6, 7]
+    assert np.isfinite(results[3].depth).any() and np.isfinite(results[4].depth).any()  # carried
+    assert not np.isfinite(results[5].depth).any()  # beyond max_age
+    folder = tmp_path / "blank"
+    folder.mkdir()
+    for k, frame in enumerate(frames):
+        assert cv2.imwrite(str(folder / f"f{k}.png"), np.round(frame * 200).astype(np.uint16))
+    code, printed, err = run_cli(capsys, "video", str(folder / "*.png"), "--rig", rail_rig, "--out", tmp_path / "v.npz", "--quiet")
+    assert code == 0 and "frame 4 holds one value throughout" in err, err
+    assert "depth for 7 frames (of 9; the first and last have no triple), 1 of them without any (frame 5) -> " in printed, printed
+
+
+def test_swapped_videos_are_named_as_a_likely_cause(pair):
+    """The moving and the reference videos given the other way round: every point comes out behind the camera. The
+    warning used to ask whether I1..I5 were in time order (there are no images I1..I5 to order here)."""
+    from nfdepth.video import dynamic_stereo_from_videos
+
+    moving, reference, _ = pair
+    with pytest.warns(UserWarning) as caught:
+        (res,) = dynamic_stereo_from_videos(reference, moving, rig=load_rig(PAPER_RIG), crossings=PAIR_CROSSINGS[:1])
+    behind = [str(w.message) for w in caught if "negative inverse depth" in str(w.message)]
+    assert len(behind) == 1 and behind[0].startswith(f"crossing {PAIR_CROSSINGS[0]}: "), behind
+    assert behind[0].endswith("are the moving and the reference videos swapped, or is the rig's motion of the wrong sign (V = -T for a camera moving by T)?")
+    assert res.valid.sum() == 0

@@ -403,12 +403,16 @@ def test_cli_levels(tmp_path, capsys, monkeypatch):
 
 
 def test_frames_without_edge_points_give_empty_maps():
-    """Flat frames through the pyramid: empty maps and the no-edge-point warning (was: cv2.remap's assertion on an empty map)."""
-    flat = [np.full((64, 80), 7.0, np.float32)] * 4
-    with pytest.warns(UserWarning, match="no edge points"):
-        frames = list(depth_from_video(flat, camera=PinholeCamera(100.0, 80, 64), velocity=(1.0, 0.0, 0.0)))
-    assert [f.index for f in frames] == [1, 2]
-    assert all(np.isnan(f.inverse_depth).all() and np.isnan(f.measured_inverse_depth).all() for f in frames)
+    """Frames without edge points through the pyramid (flat but for one corner pixel): empty maps and the no-edge-point
+    warning (was: cv2.remap's assertion on an empty map). Frames of one value throughout are not measured at all:
+    one warning names them."""
+    speck = np.full((64, 80), 7.0, np.float32)
+    speck[0, 0] = 7.5
+    for frames_in, warned in (([speck] * 4, "no edge points"), ([np.full((64, 80), 7.0, np.float32)] * 4, "frames 0-3 hold one value throughout")):
+        with pytest.warns(UserWarning, match=warned):
+            frames = list(depth_from_video(frames_in, camera=PinholeCamera(100.0, 80, 64), velocity=(1.0, 0.0, 0.0)))
+        assert [f.index for f in frames] == [1, 2]
+        assert all(np.isnan(f.inverse_depth).all() and np.isnan(f.measured_inverse_depth).all() for f in frames)
 
 
 @pytest.mark.parametrize("step", [(32.0, 0.0, 0.0), (8.0, 0.0, 32.0)], ids=["lateral-10px", "forward"])

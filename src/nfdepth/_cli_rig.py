@@ -397,9 +397,12 @@ def _cmd_video(args) -> int:
     written = 0
     last = None
     matched = []  # (frame, fits) of the triples whose outer frames' exposures were undone
+    empty = []  # frames with no depth at all
     try:
         for res in depth_from_video(counted(), rig=rig, **options):
             last = res
+            if not np.isfinite(res.depth).any():
+                empty.append(res.index)
             if res.exposure is not None:
                 matched.append((res.index, [fit for fit in res.exposure if fit is not None]))
             if kind == "npz":
@@ -430,6 +433,9 @@ def _cmd_video(args) -> int:
             f", exposure matched in {len(matched)} triple{'s' if len(matched) > 1 else ''} (frames"
             f" {', '.join(str(k) for k, _ in matched[:8])}{', ...' if len(matched) > 8 else ''}; gains {min(gains):.3g}..{max(gains):.3g}{shown})"
         )
+    if empty:
+        listed = ", ".join(str(k) for k in empty[:8]) + (", ..." if len(empty) > 8 else "")
+        note = f", {len(empty)} of them without any (frame{'s' if len(empty) > 1 else ''} {listed})" + note
     print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple){note} -> {out}")
     return 0
 

@@ -848,6 +848,8 @@ def depth_from_video(
     moved = False
     held: list[tuple[int, np.ndarray, float]] = []  # static frames before the first one that moves
     static: list[int] = []
+    blank_frames: set[int] = set()  # frames of one value throughout (blank, dropped)
+    blank_triples: list[int] = []  # the frames whose triple holds one
     rounded: list[int] = []  # static frames whose step is not zero but lost to rounding
     largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
@@ -912,7 +914,8 @@ def depth_from_video(
         exposure = None
         var_m = np.full(shape, np.nan)
         dense_maps = (np.full(shape, np.nan, np.float32), np.full(shape, np.nan, np.float32)) if dense else (None, None)
-        if moves:
+        blank = [i for i, f in zip((k - 1, k, k + 1), window) if float(f.max()) == float(f.min())]  # one value throughout
+        if moves and not blank:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
                 warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
@@ -1004,6 +1007,9 @@ def depth_from_video(
                     bent_frames.append(k)
                     bent = max(bent, dt.off_line)
                     bent_ahead = max(bent_ahead, dt.off_line_ahead)
+        elif blank:
+            blank_frames.update(blank)
+            blank_triples.append(k)
         else:
             static.append(k)
 
@@ -1047,6 +1053,15 @@ def depth_from_video(
         raise ValueError(
             f"the camera does not move in any of the {triples} frame triples (frames {_frame_list(static)} have the same position"
             f" one frame before and after), so no depth can be measured: {_MOVE_HINT}{rounding}"
+        )
+    if blank_frames:
+        warnings.warn(
+            f"frame{'s' if len(blank_frames) > 1 else ''} {_frame_list(sorted(blank_frames))} hold{'' if len(blank_frames) > 1 else 's'}"
+            f" one value throughout (a blank or dropped frame?): the triples of {len(blank_triples)} of {triples} frames"
+            f" ({_frame_list(blank_triples)}) are not measured and carry the fused depth of the frames before for up to"
+            f" {max_age} frame{'s' if max_age != 1 else ''} (max_age)",
+            UserWarning,
+            stacklevel=2,
         )
     if static:
         warnings.warn(
@@ -1395,7 +1410,17 @@ def dynamic_stereo_from_videos(
             c = pending.pop(0)
             r_used, exposure = match_camera_exposure(m_win[2], r_win, at=2) if match_exposure else (r_win, None)  # R[c] against M[c]
             frames = interleaved_frames(m_win, r_used, 2, shared=shared)  # window index 2 is frame c
-            result = dynamic_stereo_from_rig(frames, rig, match_exposure=match_exposure, **options)  # and each frame onto I3's
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                result = dynamic_stereo_from_rig(frames, rig, match_exposure=match_exposure, **options)  # and each frame onto I3's
+            for w in caught:  # as raised, named by crossing; for two videos a sign mistake may be the videos swapped
+                message = str(w.message)
+                if re.match(_BEHIND_WARNING, message) and "NOT_POSITIVE)" in message:
+                    message = message[: message.index("NOT_POSITIVE)") + len("NOT_POSITIVE)")] + (
+                        "; are the moving and the reference videos swapped, or is the rig's motion of the wrong sign (V = -T"
+                        " for a camera moving by T)?"
+                    )
+                warnings.warn(f"crossing {c}: {message}", w.category, stacklevel=2)
             reach = int(np.ceil(2.0 * float(options.get("sigma_px", _DYNAMIC_SIGMA_PX))))  # the smoothing spreads a plateau's edge this far
             apart = clipped_apart(m_win[2], r_win[2], exposure, reach)
             if apart.any():  # the edge points beside one camera's clipped highlights: wrong flows, UNCERTAIN
