@@ -76,6 +76,31 @@ _ROUNDS = 2
 #: Pixels this close to a reduced view's border are not compared (px).
 _BORDER_PX = 4
 
+#: A video's frames (:func:`match_frame_exposures`) are fitted through their flatter half of the pairs (by the
+#: larger gradient magnitude of the two at _FLAT_SIGMA_PX), which the pairs' misplacement by the reduced dense map
+#: and the scene's motion change least; the test of the fit takes every pair. On the rendered rail with every other
+#: frame 8 grey levels brighter, the fits through every pair were up to half a grey level off, a single triple's
+#: median depth error 2.1-5.3 % against 1.8-2.5 % with the frames taken as they are; through the flatter half,
+#: 1.8-2.6 %. Teddy's row (black levels 1-3 grey levels apart): 2192 points at 2.11 % / 11.3 % bad-1px before,
+#: 2182 at 1.61 % / 11.8 %.
+_FRAME_FLAT_SHARE = 0.5
+#: Frames taken a pixel or two apart (:func:`match_nearby_exposures`) are compared at the pixels where both are
+#: flattest: this share of the frame, by the larger of the two gradient magnitudes at _FLAT_SIGMA_PX (px), whose
+#: intensities such a motion changes least. Measured on Tsukuba reduced to a quarter (1.25 px between views):
+#: gains of 1.05 found as 1.047-1.050, equal views left alone (ratios 0.97-1.02, also 2.5 px apart); with half
+#: the frame, 1.040-1.056 at ratios of 0.75-0.78, close to MAX_RESIDUAL_RATIO.
+_FLAT_SHARE = 0.2
+_FLAT_SIGMA_PX = 1.0
+#: Those frames are compared halved (``cv2.pyrDown``, which also halves the motion) while at least this many
+#: pixels remain (every pixel of a 640 x 480 frame cost 8 ms a frame).
+_NEARBY_SAMPLE = 40_000
+
+
+def _gradient_magnitude(img: np.ndarray) -> np.ndarray:
+    """The gradient magnitude of the float32 image ``img`` smoothed by :data:`_FLAT_SIGMA_PX`: low where it is flat."""
+    s = cv2.GaussianBlur(img, (0, 0), _FLAT_SIGMA_PX)
+    return cv2.magnitude(cv2.Sobel(s, cv2.CV_32F, 1, 0), cv2.Sobel(s, cv2.CV_32F, 0, 1))
+
 
 def _reduction(shape) -> int:
     """How many ``cv2.pyrDown`` halvings the first pass takes: up to :data:`_PASS_MAX_DOWN`, the shorter side kept at :data:`_PASS_MIN_SIDE_PX` or more."""
@@ -350,31 +375,6 @@ def match_camera_exposure(first, frames, *, at: int):
         return frames, None
     g, o = total[0]
     return [images[0] if k == at else _undone(f, g, o) for k, f in enumerate(frames)], (g, o)
-
-
-#: A video's frames (:func:`match_frame_exposures`) are fitted through their flatter half of the pairs (by the
-#: larger gradient magnitude of the two at _FLAT_SIGMA_PX), which the pairs' misplacement by the reduced dense map
-#: and the scene's motion change least; the test of the fit takes every pair. On the rendered rail with every other
-#: frame 8 grey levels brighter, the fits through every pair were up to half a grey level off, a single triple's
-#: median depth error 2.1-5.3 % against 1.8-2.5 % with the frames taken as they are; through the flatter half,
-#: 1.8-2.6 %. Teddy's row (black levels 1-3 grey levels apart): 2192 points at 2.11 % / 11.3 % bad-1px before,
-#: 2182 at 1.61 % / 11.8 %.
-_FRAME_FLAT_SHARE = 0.5
-#: Frames taken a pixel or two apart (:func:`match_nearby_exposures`) are compared at the pixels where both are
-#: flattest: this share of the frame, by the larger of the two gradient magnitudes at _FLAT_SIGMA_PX (px), whose
-#: intensities such a motion changes least. Measured on Tsukuba reduced to a quarter (1.25 px between views):
-#: gains of 1.05 found as 1.047-1.050, equal views left alone (ratios 0.97-1.02, also 2.5 px apart); with half
-#: the frame, 1.040-1.056 at ratios of 0.75-0.78, close to MAX_RESIDUAL_RATIO.
-_FLAT_SHARE = 0.2
-_FLAT_SIGMA_PX = 1.0
-#: Those frames are compared halved (``cv2.pyrDown``, which also halves the motion) while at least this many
-#: pixels remain (every pixel of a 640 x 480 frame cost 8 ms a frame).
-_NEARBY_SAMPLE = 40_000
-
-
-def _gradient_magnitude(img: np.ndarray) -> np.ndarray:
-    s = cv2.GaussianBlur(img, (0, 0), _FLAT_SIGMA_PX)
-    return cv2.magnitude(cv2.Sobel(s, cv2.CV_32F, 1, 0), cv2.Sobel(s, cv2.CV_32F, 0, 1))
 
 
 def match_nearby_exposures(frames, *, middle: int):

@@ -135,7 +135,7 @@ def _vn_std(field: GradientField, vn: np.ndarray, noise: float, *, sigma_px: flo
 #: the image noise's part of its standard deviation: on the noise-free pyramid (experiments 1-4 and static
 #: stereo) the median |error| is 0.16-0.43 % of the flow, a standard deviation of 0.23-0.64 %. Without it,
 #: noise-free images (renders, the demo's files) had an error bar of exactly 0; with noise of 1 grey level
-#: (a standard deviation near 1.9 % of the flow) it changes the error bar by about 0.2 %.
+#: (a standard deviation near 1.9 % of the flow) it widens the error bar by about 2 % of itself.
 STENCIL_REL_STD = 0.004
 
 
@@ -219,7 +219,7 @@ def _warn_if_clipped_apart(frames, applied) -> None:
     Its exposure could not be compared with ``I3``'s (too few unclipped
     pixels) or explained too little to undo: its intensities differ from
     ``I3``'s wherever one of them is clipped, and eq. 4 reads that as motion
-    (``I2, I4`` three times brighter, 86 % clipped: a median error of 12 %).
+    (``I2, I4`` three times brighter, 86 % clipped at 255: a median error of 11.4 %).
     """
     shares = [float(np.mean(top | bottom)) for top, bottom in (_plateaus(f) for f in frames)]
     apart = [k for k, (share, fit) in enumerate(zip(shares, applied)) if k != 2 and fit is None and abs(share - shares[2]) > _CLIPPED_APART]
