@@ -207,6 +207,10 @@ def test_video_cli_errors(tmp_path, capsys, sequence_dir, rail_rig):
     code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "a.txt")
     assert code == 2 and "must be a .npz file or a folder" in err
 
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "a.npz", "--unit", "m")
+    assert code == 2 and err.strip() == "nfdepth: error: --unit labels the colour bar of --figure: give --figure too"  # was: ignored
+    assert not (tmp_path / "a.npz").exists()
+
     code, _, err = run_cli(capsys, "video", tmp_path / "nothing.mp4", "--rig", rail_rig, "--out", tmp_path / "a.npz")
     assert code == 3 and "no such file" in err
 
@@ -411,6 +415,7 @@ def test_dynamic_cli_videos_errors(tmp_path, capsys, pair):
         (["--moving-video", m, "--reference-video", r, "--crossings", "4"], "must be synchronised frame by frame: "),
         (["--moving-video", m, "--reference-video", m, "--crossings", "4", "15"], "crossing 15 needs frames 13..17, but the videos have 17 frames"),
         ([tmp_path / "a.png", "--crossings", "4"], "--crossings and --shared go with --moving-video"),
+        (["--moving-video", m, "--reference-video", r, "--crossings", "4", "--unit", "m"], "--unit labels the colour bar of --figure: give --figure too"),
         ([], "exactly 5 images"),
     ]
     for extra, fragment in cases:

@@ -81,7 +81,14 @@ def _distinct(outs: dict, CLIError) -> dict:
 def _check_sigma(args, CLIError) -> dict:
     if args.sigma_px is not None and (not np.isfinite(args.sigma_px) or args.sigma_px < 0):
         raise CLIError(f"--sigma-px must be a finite number >= 0, got {args.sigma_px:g}")
+    if args.unit is not None and not args.figure:  # it labels nothing else
+        raise CLIError("--unit labels the colour bar of --figure: give --figure too")
     return {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
+
+
+def _unit(args) -> str:
+    """The colour bar's unit of depth (``--unit``; default: scene units)."""
+    return args.unit if args.unit is not None else "scene units"
 
 
 def _outputs(args, CLIError):
@@ -175,7 +182,7 @@ def _cmd_dynamic(args) -> int:
         write_array(outs["uncertainty"], std, force=args.force)
     if "preview" in outs:
         write_colormap_png(outs["preview"], depth, force=args.force)
-    write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=args.unit)
+    write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=_unit(args))
     ok = result.valid
     if "ply" in outs:
         img = to_rgb8(read_image(args.images[2], grey=False, dtype=None))  # 16-bit or float input: stretched to 8 bits
@@ -267,7 +274,7 @@ def _cmd_dynamic_videos(args) -> int:
     if kind == "npz":
         write_crossings_npz(results, out, camera=rig.camera, force=args.force)
     if last is not None:
-        write_figures(outs, last.depth, last.depth_std, title=f"crossing {last.index}", unit=args.unit)
+        write_figures(outs, last.depth, last.depth_std, title=f"crossing {last.index}", unit=_unit(args))
     count = len(crossings or rig.motion.crossings)
     print(f"depth at {count} crossing{'s' if count != 1 else ''} -> {out}")
     return 0
@@ -421,7 +428,7 @@ def _cmd_video(args) -> int:
         write_video_npz(results, out, camera=rig.camera, force=args.force)
         written = len(results)
     if last is not None:
-        write_figures(figures, last.depth, last.depth_std, title=f"frame {last.index} (fused)", unit=args.unit)
+        write_figures(figures, last.depth, last.depth_std, title=f"frame {last.index} (fused)", unit=_unit(args))
     note = ""
     if matched:
         from .cli import _offset_text
@@ -466,7 +473,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--uncertainty", metavar="FILE", help="also write the depth standard deviation here")
     p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG")
     p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (and, with the std, PNG_std.png); videos: the last crossing")
-    p.add_argument("--unit", default="scene units", help="unit of depth for the colour bar (default: scene units)")
+    p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")
     p.add_argument("--csv", metavar="FILE", help="also write the points as CSV: row,col,depth,depth_std (sub-pixel positions)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 3)")
@@ -479,7 +486,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--out", required=True, metavar="OUT", help="OUT.npz (all frames, written at the end) or a folder (depth_NNNNNN.tif per frame)")
     p.add_argument("--poses", metavar="CSV", help="camera poses per frame (frame,x,y,z[,rx,ry,rz]); replaces the rig's [video]")
     p.add_argument("--figure", metavar="PNG", help="also write figures with a colour bar of the last frame's fused depth (PNG) and std (PNG_std.png)")
-    p.add_argument("--unit", default="scene units", help="unit of depth for the colour bar (default: scene units)")
+    p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 2)")
     p.add_argument(
         "--levels",
