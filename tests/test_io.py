@@ -642,3 +642,25 @@ def test_depth_to_points_principal_point_and_float_colours():
     rgb16[0, 1] = (10, 200, 65535)
     _, col16 = depth_to_points(z, focal_px=2.0, image=rgb16)
     np.testing.assert_array_equal(col16[1], [10, 200, 255])  # not scaled: clipped (to_rgb8 scales)
+
+
+def test_compressed_tiffs_that_tifffile_cannot_decode_are_read_by_opencv(tmp_path):
+    """OpenCV writes LZW-compressed TIFFs by default, which tifffile decodes only with the optional imagecodecs: such
+    files were refused as 'not a readable TIFF'. They are read through OpenCV instead (8 and 16 bits, RGB; and
+    OpenCV's uncompressed float32 as before)."""
+    import tifffile
+
+    rng = np.random.default_rng(0)
+    cases = {
+        "u8": rng.integers(0, 256, (24, 32), dtype=np.uint8),
+        "u16": rng.integers(0, 65536, (24, 32), dtype=np.uint16),
+        "f32": rng.normal(100.0, 30.0, (24, 32)).astype(np.float32),
+        "rgb": rng.integers(0, 256, (24, 32, 3), dtype=np.uint8),
+    }
+    for name, img in cases.items():
+        path = tmp_path / f"{name}.tif"
+        assert cv2.imwrite(str(path), img[..., ::-1] if img.ndim == 3 else img)
+        with tifffile.TiffFile(path) as tif:
+            assert tif.pages[0].compression == (1 if name == "f32" else 5)  # LZW (OpenCV leaves float32 uncompressed)
+        got = read_image(path, grey=False, dtype=None)
+        np.testing.assert_array_equal(got, img)

@@ -249,7 +249,14 @@ def _decode_tiff(path: Path) -> np.ndarray:
     try:
         arr = tifffile.imread(path)
     except Exception as exc:  # tifffile raises several types on broken files
-        raise _read_error(path, f"not a readable TIFF ({type(exc).__name__}: {exc})") from None
+        reason = f"{type(exc).__name__}: {exc}"
+        try:  # a compression tifffile reads only with the optional imagecodecs (LZW, OpenCV's own default): OpenCV reads it
+            data = path.read_bytes()
+            return _decode_cv2(path, data, ".tif")
+        except ImageReadError:
+            pass
+        hint = "; `pip install imagecodecs` lets tifffile read its compression" if "imagecodecs" in reason else ""
+        raise _read_error(path, f"not a readable TIFF ({reason}){hint}") from None
     finally:
         log.setLevel(level)
     arr = np.asarray(arr)
