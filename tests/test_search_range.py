@@ -720,3 +720,16 @@ def test_a_given_range_that_misses_most_of_a_real_scene_warns():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         static_stereo(views, reference=1, disparity_range_px=(5.0, 30.0))
+
+
+def test_cli_names_the_unit_of_disparities_per_unit_of_position(plane_files, tmp_path, capsys):
+    """With ``--positions`` in another unit than view steps the disparities are px per unit of position: the run's
+    line said "px" (a plane at 30 px per step, positions 0 2 4: "range 15..15 px")."""
+    from nfdepth.cli import main
+
+    assert main(["stereo", *plane_files, "--positions", "0", "2", "4", "--disparity-range", "0", "20", "--out", str(tmp_path / "d.pfm")]) == 0
+    printed = capsys.readouterr().out
+    assert re.search(r", range 1[45](\.\d+)?\.\.1[56](\.\d+)? px per unit of position, .*, searched 0\.\.20 px per unit of position -> ", printed), printed
+    assert main(["stereo", *plane_files, "--positions", "0", "1", "2", "--disparity-range", "0", "40", "--out", str(tmp_path / "e.pfm")]) == 0
+    printed = capsys.readouterr().out
+    assert "px per unit" not in printed and "searched 0..40 px -> " in printed, printed

@@ -618,7 +618,9 @@ def _cmd_stereo(args) -> int:
         result = replace(result, disparity=disparity)  # its uncertainty stays NaN where filled
     values = result.disparity
     std = result.uncertainty
-    unit = "px"
+    # disparities are per unit of position: px per view step only where the views are a step of 1 apart
+    stepped = args.positions is None or bool(np.all(np.diff(np.asarray(args.positions, float)) == 1.0))
+    unit = per_unit = "px" if stepped else "px per unit of position"
     if focal is not None:
         values = unbounded = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
         if depth_range is not None:  # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
@@ -658,7 +660,7 @@ def _cmd_stereo(args) -> int:
             if outside:
                 notes += f" ({outside} more filled beyond --depth-range: NaN)"
     if result.search_range_px is not None:
-        notes += f", searched {result.search_range_px[0]:g}..{result.search_range_px[1]:g} px"
+        notes += f", searched {result.search_range_px[0]:g}..{result.search_range_px[1]:g} {per_unit}"
     if column:
         both = int(np.count_nonzero(valid & (result.axis_count == 2)))
         notes += f", row and column fused ({both} pixels from both)"
