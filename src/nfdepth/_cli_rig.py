@@ -132,6 +132,13 @@ _REASON_WORDS = {
 }
 
 
+def _images_matched(exposure) -> str:
+    """``"I2 gain 1.2 offset +10; I4 ..."`` for the images of dynamic stereo whose exposure was matched to I3 (``EdgeDepth.exposure``)."""
+    from .cli import _exposure_text
+
+    return "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(exposure or (), 1) if fit is not None)
+
+
 def _reasons_text(reasons) -> str:
     """``"; 20 undeterminable (...), 5 uncertain"`` for the edge points without depth, by reason code; ``""`` for none."""
     codes, counts = np.unique(np.asarray(reasons), return_counts=True)
@@ -140,6 +147,7 @@ def _reasons_text(reasons) -> str:
 
 
 def _cmd_dynamic(args) -> int:
+    from .cli import _check_finite
     from .io import (
         atomic_write,
         read_image,
@@ -167,8 +175,6 @@ def _cmd_dynamic(args) -> int:
     rig = load_rig(args.rig)
     rig.relative_motion()  # a missing [motion] fails before any image is read
     frames = [read_image(p) for p in args.images]
-    from .cli import _check_finite
-
     _check_finite(args.images, frames, label=lambda k, path: f"I{k + 1} '{Path(path).name}'")
     for k, (p, f) in enumerate(zip(args.images, frames), 1):
         rig.check_image_shape(f.shape, what=f"I{k} '{Path(p).name}'")
@@ -196,11 +202,8 @@ def _cmd_dynamic(args) -> int:
         atomic_write(outs["csv"], lambda fh: fh.write(text.encode()), force=args.force)
     z = result.depth[ok]
     rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
-    from .cli import _exposure_text
-
     without = _reasons_text(result.reason[~ok])
-
-    matched = "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(result.exposure or (), 1) if fit is not None)
+    matched = _images_matched(result.exposure)
     matched = f", exposure matched to I3 ({matched})" if matched else ""
     print(f"depth at {int(ok.sum())} of {len(result)} edge points of I3 ({Path(args.images[2]).name}{without}), range {rng_txt}{matched} -> {outs['out']}")
     return 0
@@ -208,6 +211,7 @@ def _cmd_dynamic(args) -> int:
 
 def _cmd_dynamic_videos(args) -> int:
     """``nfdepth dynamic --moving-video M --reference-video R``: depth at each crossing instant."""
+    from .cli import _exposure_text
     from .io import make_output_folder
     from .rig import check_crossings, load_rig
     from .video import (
@@ -252,8 +256,6 @@ def _cmd_dynamic_videos(args) -> int:
         late = [c for c in (crossings or rig.motion.crossings) if c + 2 >= n]
         if late:
             raise CLIError(f"crossing {late[0]} needs frames {late[0] - 2}..{late[0] + 2}, but the videos have {n} frames (0..{n - 1})")
-    from .cli import _exposure_text
-
     results = []
     last = None
     options["match_exposure"] = not args.no_match_exposure
@@ -267,7 +269,7 @@ def _cmd_dynamic_videos(args) -> int:
         z = res.depth[res.valid]
         rng_txt = f"{np.min(z):.4g}..{np.max(z):.4g}" if z.size else "none"
         matched = "" if res.exposure is None else f", the reference camera's exposure matched ({_exposure_text(res.exposure)})"
-        images = "; ".join(f"I{k} {_exposure_text(fit)}" for k, fit in enumerate(res.result.exposure or (), 1) if fit is not None)
+        images = _images_matched(res.result.exposure)
         matched += f", images matched to I3 ({images})" if images else ""
         print(f"crossing {res.index}: depth at {n} of {len(res.result)} edge points, range {rng_txt}{matched}")
         last = res

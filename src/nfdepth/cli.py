@@ -622,9 +622,9 @@ def _cmd_stereo(args) -> int:
     stepped = args.positions is None or bool(np.all(np.diff(np.asarray(args.positions, float)) == 1.0))
     unit = per_unit = "px" if stepped else "px per unit of position"
     if focal is not None:
-        values = unbounded = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
-        if depth_range is not None:  # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
-            values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset, depth_range=depth_range)
+        # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
+        values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset, depth_range=depth_range)
+        unbounded = values if depth_range is None else result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
         with np.errstate(divide="ignore", invalid="ignore"):
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)

@@ -435,7 +435,7 @@ class CalibratedRowDepth:
         no value at all or the reference's pixel lies off the rectified
         canvas, or beyond ``depth_range``) and the bool mask of filled pixels.
         """
-        from .stereo import fill_background
+        from .stereo import _beyond_depths, fill_background
 
         d, _ = fill_background(self.disparity, axis=self.row.axis)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -470,12 +470,6 @@ def _depth_points(camera: CalibratedCamera, depth, image):
     return pts, point_colors(image, rows, cols, depth.shape)
 
 
-def _beyond_depths(depth, depth_range) -> np.ndarray:
-    """Where ``depth`` lies outside ``depth_range`` ``(near, far)`` (NaN: not)."""
-    with np.errstate(invalid="ignore"):
-        return (depth < depth_range[0]) | (depth > depth_range[1])
-
-
 def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **stereo_options) -> CalibratedRowDepth:
     """Depth in the reference camera's pixels from a calibrated, unrectified row of views.
 
@@ -493,6 +487,7 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
     """
     from ._validate import check_depth_range
     from .stereo import (
+        _beyond_depths,
         _checked_depth_disparities,
         _warn_if_mostly_beyond,
         static_stereo,

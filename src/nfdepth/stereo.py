@@ -534,9 +534,14 @@ class StereoResult:
             z = f * b / total
         keep = np.isfinite(total) & (total > 0)
         if bounds is not None:
-            with np.errstate(invalid="ignore"):
-                keep &= (z >= bounds[0]) & (z <= bounds[1])
+            keep &= ~_beyond_depths(z, bounds)
         return np.where(keep, z, np.nan)
+
+
+def _beyond_depths(depth, depth_range) -> np.ndarray:
+    """Where ``depth`` lies outside ``depth_range`` ``(near, far)`` (NaN: not)."""
+    with np.errstate(invalid="ignore"):
+        return (depth < depth_range[0]) | (depth > depth_range[1])
 
 
 def check_depth_scale(focal_px, baseline, *, names=("focal_px", "baseline")) -> tuple[float, float]:

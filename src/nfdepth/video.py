@@ -842,6 +842,7 @@ def depth_from_video(
     lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
     noises: list[float] = []  # the window's frames' noise estimates (each frame's once: it serves three triples)
+    blanks: list[bool] = []  # whether each of the window's frames holds one value throughout (blank, dropped), likewise
     history: list[np.ndarray] = []  # dense: the last dense_frames_before + 2 frames
     state: _State | None = None
     prev_pos = prev_orientation = prev_rotation = None
@@ -876,6 +877,7 @@ def depth_from_video(
         if rig is not None and camera is None and any(rig.distortion):
             img = rig.undistort(img)
         window.append(img)
+        blanks.append(float(img.max()) == float(img.min()))
         if noise_std is None:
             noises.append(estimate_noise_std(img))
         if dense:
@@ -887,6 +889,7 @@ def depth_from_video(
         if len(window) > 3:
             window.pop(0)
             noises = noises[-3:]
+        blanks = blanks[-3:]
         k = first + n - 1
         triples += 1
         p_prev, p_mid, p_next = (_position(spec, i, motion_name, rig) for i in (k - 1, k, k + 1))
@@ -914,7 +917,7 @@ def depth_from_video(
         exposure = None
         var_m = np.full(shape, np.nan)
         dense_maps = (np.full(shape, np.nan, np.float32), np.full(shape, np.nan, np.float32)) if dense else (None, None)
-        blank = [i for i, f in zip((k - 1, k, k + 1), window) if float(f.max()) == float(f.min())]  # one value throughout
+        blank = [i for i, one in zip((k - 1, k, k + 1), blanks) if one]
         if moves and not blank:
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
