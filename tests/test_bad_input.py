@@ -516,8 +516,11 @@ def test_frames_above_the_pixel_limit_are_refused(monkeypatch):
     with pytest.raises(_validate.ImageTooLargeError, match="views\\[0\\] has 7072x7072"):
         stereo.static_stereo([huge] * 3, reference=1)
     monkeypatch.setenv(_validate.MAX_PIXELS_ENV, "1000")
-    with pytest.raises(_validate.ImageTooLargeError, match="above the limit of 0.001 megapixels"):
-        nf.normal_flow(VIEWS3)
+    with pytest.raises(_validate.ImageTooLargeError, match=r"= 0\.00102 megapixels, above the limit of 0.001 megapixels"):
+        nf.normal_flow(VIEWS3)  # as many digits as tell the two apart
+    monkeypatch.setenv(_validate.MAX_PIXELS_ENV, "100000")
+    with pytest.raises(_validate.ImageTooLargeError, match=r"= 0\.11 megapixels, above the limit of 0.1 megapixels"):
+        nf.normal_flow([np.broadcast_to(np.float32(0), (288, 384))] * 3)
     monkeypatch.setenv(_validate.MAX_PIXELS_ENV, "1024")
     nf.normal_flow(VIEWS3)  # exactly at the limit
     monkeypatch.setenv(_validate.MAX_PIXELS_ENV, "lots")
@@ -672,12 +675,12 @@ def _cli_cases(tmp: Path, v):
         ("positions nan", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1", "nan"], 2, "positions must be finite"),
         ("positions tiny unit", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1e-300", "2e-300"], 2, "positions must keep the views 1e-30 to 1e+30 units from the reference"),
         ("positions huge unit", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1e300", "2e300"], 2, "rescale them, e.g. to steps between neighbouring views"),
-        ("sigma negative", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "-1"], 2, "sigma_px must be a finite number >= 0, got -1.0"),
-        ("sigma huge", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "1e300"], 2, "sigma_px = 1e+300 px is beyond any image"),
+        ("sigma negative", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "-1"], 2, "--sigma-px must be a finite number >= 0, got -1.0"),
+        ("sigma huge", ["stereo", v0, v1, v2, "--out", out, "--sigma-px", "1e300"], 2, "--sigma-px 1e+300 px is beyond any image"),
         ("levels", ["stereo", v0, v1, v2, "--out", out, "--levels", "0"], 2, "levels must be >= 1"),
         ("cost step zero", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "0"], 2, "--cost-step-px must be a positive number, got 0"),
         ("cost step nan", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "nan"], 2, "--cost-step-px must be a positive number, got nan"),
-        ("cost step wider than the range", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "1e300"], 2, "cost_step_px = 1e+300 px is wider than half the search range the pyramid found"),
+        ("cost step wider than the range", ["stereo", v0, v1, v2, "--out", out, "--cost-step-px", "1e300"], 2, "--cost-step-px 1e+300 px is wider than half the search range the pyramid found"),
         ("sizes differ", ["stereo", v0, str(tmp / "small.png"), v2, "--out", out], 2, "all views must have the same size, got v0.png 64x48, small.png 16x16, v2.png 64x48"),
         ("missing view", ["stereo", v0, str(tmp / "nope.png"), v2, "--out", out], 3, "nope.png': no such file"),
         ("directory view", ["stereo", v0, str(tmp / "adir"), v2, "--out", out], 3, "adir': it is a directory, not a file"),
@@ -686,19 +689,26 @@ def _cli_cases(tmp: Path, v):
         ("output exists", ["stereo", v0, v1, v2, "--out", str(tmp / "exists.pfm")], 4, "exists.pfm' exists; use --force to overwrite it"),
         ("output extension", ["stereo", v0, v1, v2, "--out", str(tmp / "o.png")], 2, "must end in one of .pfm, .tif, .tiff, .npy"),
         ("output folder missing", ["stereo", v0, v1, v2, "--out", str(tmp / "nodir" / "o.pfm")], 4, "directory '" + str(tmp / "nodir") + "' does not exist"),
-        ("output folder is a file", ["stereo", v0, v1, v2, "--out", str(tmp / "afile" / "o.pfm")], 4, "directory '" + str(tmp / "afile") + "' is not a directory"),
+        ("output folder is a file", ["stereo", v0, v1, v2, "--out", str(tmp / "afile" / "o.pfm")], 4, "o.pfm': '" + str(tmp / "afile") + "' is not a directory"),
+        ("demo out inside a file", ["demo", "--out", str(tmp / "afile" / "sub")], 4, f"cannot write '{tmp / 'afile' / 'sub'}': Not a directory"),
+        ("empty --out", ["demo", "--out", ""], 2, "--out is empty (''); expected a value (an unset shell variable?)"),
+        ("empty --json=", ["reproduce", "--json=", "--only", "exp1"], 2, "--json is empty ('--json='); expected a value"),
+        ("empty positional", ["view", ""], 2, "argument 2 is empty ('')"),
         ("outputs clash", ["stereo", v0, v1, v2, "--out", out, "--uncertainty", out], 2, "output paths must differ"),
         ("view missing", ["view", str(tmp / "nope.pfm")], 3, "nope.pfm': no such file"),
         ("view output is a directory", ["view", str(tmp / "map.npy"), "--out", str(tmp / "adir")], 2, "must end in one of .png"),
         ("view output exists", ["view", str(tmp / "map.npy"), "--out", v0], 4, "v0.png' exists; use --force"),
         ("view vmin", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "nan"], 2, "vmin must be a finite number, got nan"),
-        ("view range", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "5", "--vmax", "1"], 2, "vmax must be >= vmin"),
+        ("view range", ["view", str(tmp / "map.npy"), "--out", str(tmp / "m.png"), "--vmin", "5", "--vmax", "1"], 2, "--vmax must be >= --vmin, got --vmin 5 --vmax 1"),
+        ("view range, colour bar", ["view", str(tmp / "map.npy"), "--colorbar", "--out", str(tmp / "m.png"), "--vmin", "5", "--vmax", "1"], 2, "--vmax must be >= --vmin"),
         ("bench json", ["bench", "--json", str(tmp / "b.txt")], 2, "--json '" + str(tmp / "b.txt") + "' must end in one of .json"),
         ("bench threads", ["bench", "--threads", "0"], 2, "--threads must be an integer >= 1, got 0"),
         # OpenCV starts as many workers as asked for: 10**9 ran the machine out of processes
         ("bench threads huge", ["bench", "--threads", "1000000000"], 2, "--threads = 1000000000 is more than this machine's"),
         ("reproduce noise", ["reproduce", "--noise", "-1"], 2, "--noise must be a finite number >= 0"),
-        ("reproduce noise huge", ["reproduce", "--only", "exp1", "--noise", "1e300"], 2, "noise_std = 1e+300 grey levels is beyond any image: expected at most 1e+06"),
+        ("levels zero", ["stereo", v0, v1, v2, "--out", out, "--levels", "0"], 2, "--levels must be >= 1"),
+        ("positions too few", ["stereo", v0, v1, v2, "--out", out, "--positions", "0", "1"], 2, "--positions must hold one number per view (3), got shape (2,)"),
+        ("reproduce noise huge", ["reproduce", "--only", "exp1", "--noise", "1e300"], 2, "--noise 1e+300 grey levels is beyond any image: expected at most 1e+06"),
         ("reproduce json folder", ["reproduce", "--only", "exp1", "--json", str(tmp / "nodir" / "r.json")], 4, "does not exist"),
         ("reproduce out is a file", ["reproduce", "--only", "exp1", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),
         ("demo out is a file", ["demo", "--out", str(tmp / "afile")], 4, "afile' exists and is not a directory"),
@@ -740,7 +750,7 @@ def test_cli_image_too_large(tmp_path, views_on_disk, capfd, monkeypatch):
     code, out, err = run_cli(capfd, "stereo", *views_on_disk, "--out", tmp_path / "o.pfm")
     assert code == 2
     assert err.strip().splitlines() == [err.strip()]
-    assert "has 64x48 px (width x height) = 0.0 megapixels, above the limit of 0.001 megapixels per frame" in err
+    assert "has 64x48 px (width x height) = 0.003 megapixels, above the limit of 0.001 megapixels per frame" in err
     assert not (tmp_path / "o.pfm").exists()
 
 
@@ -1052,3 +1062,54 @@ def test_an_unreadable_rig_file_is_an_input_error(tmp_path, views_on_disk, capfd
     assert err.count("\n") == 1 and "Traceback" not in err and not (tmp_path / "d.pfm").exists()
     assert got == 3, err  # was 4: "an output could not be written"
     assert err.startswith(f"nfdepth: error: cannot read rig file '{rig}'"), err
+
+
+# ------------------------------------------- standard output closed early (| head -1)
+
+
+class _ClosedPipe:
+    """A stdout whose reader has gone after ``lines`` writes."""
+
+    def __init__(self, lines: int):
+        self.lines, self.written = lines, []
+
+    def write(self, text):
+        if len(self.written) >= self.lines:
+            raise BrokenPipeError(32, "Broken pipe")
+        self.written.append(text)
+        return len(text)
+
+    def flush(self):
+        if len(self.written) >= self.lines:
+            raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_a_closed_stdout_keeps_the_run_and_its_outputs(tmp_path, views_on_disk, capsys, monkeypatch):
+    """``nfdepth stereo ... | head -1``: the reader goes; the run still ends with exit 0 and every file it was asked for."""
+    closed = _ClosedPipe(0)
+    monkeypatch.setattr(sys, "stdout", closed)
+    got = main(["stereo", *map(str, views_on_disk), "--out", str(tmp_path / "d.pfm"), "--uncertainty", str(tmp_path / "s.pfm")])
+    assert sys.stdout is closed  # restored after the run
+    monkeypatch.undo()
+    assert got == 0 and capsys.readouterr().err == ""
+    assert io.read_pfm(tmp_path / "d.pfm").shape == io.read_pfm(tmp_path / "s.pfm").shape == (48, 64)
+
+
+def test_a_stdout_closed_before_the_first_line_is_not_an_error():
+    """The same in a real process: no 'Broken pipe' line, no 'Exception ignored' at exit, exit 0."""
+    proc = subprocess.Popen([sys.executable, "-m", "nfdepth", "fetch-data", "--list"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # before the command prints anything (importing takes far longer)
+    with proc.stderr:
+        err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 0
+    assert err == b""
+
+
+def test_view_of_a_map_with_no_value_says_so(tmp_path, capfd):
+    np.save(tmp_path / "nan.npy", np.full((8, 10), np.nan, np.float32))
+    for extra in ([], ["--colorbar"]):
+        out = tmp_path / f"v{len(extra)}.png"
+        got, stdout, err = run_cli(capfd, "view", tmp_path / "nan.npy", "--out", out, *extra)
+        assert got == 0 and stdout == f"wrote {out}\n"
+        assert err == f"nfdepth: warning: '{tmp_path / 'nan.npy'}' holds no finite value (all unknown): the PNG is all black\n"
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

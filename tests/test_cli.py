@@ -132,7 +132,11 @@ def test_reproduce_sigma_and_max_rel_std_reach_the_experiments(tmp_path, capsys)
     assert code == 0, err
     got = _without_runtime(json.loads(js.read_text())["exp2"])
     want = _without_runtime(run_paper_experiment("exp2", noise_std=1.0, sigma_px=2.5, max_rel_std=0.02).summary())
-    assert got == {**want, "stencil": "matched"}
+    import nfdepth
+
+    settings = {"nfdepth_version": nfdepth.__version__, "noise_std": 1.0, "seed": 0, "sigma_px": 2.5, "max_rel_std": 0.02, "stencil": "matched"}
+    assert got == {**want, "stencil": "matched", "settings": settings}  # two runs with other settings are told apart
+    assert 0.67 / 1.5 < got["median_error_over_std"] < 0.67 * 1.5
     # and each matters: --max-rel-std 0.02 refuses about half the points, --sigma-px 2.5 keeps more than the default 4 px
     loose = run_paper_experiment("exp2", noise_std=1.0, sigma_px=2.5).summary()["points"]
     assert 0 < got["points"] < 0.6 * loose

@@ -351,7 +351,7 @@ def test_middlebury2005_loader_decodes_its_files(tmp_path):
 
 def test_damaged_scene_files_are_named(tmp_path):
     folder = _write_art(tmp_path, dmin="abc")
-    with pytest.raises(DataNotFoundError, match=rf"^'{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
+    with pytest.raises(D.DataFileError, match=rf"^'{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
         D.load_middlebury2005("Art", tmp_path)
     _write_art(tmp_path, dmin="")
     with pytest.raises(DataNotFoundError, match=r"should hold one number \(dmin in full-size px\), got ''$"):
@@ -362,7 +362,14 @@ def test_damaged_scene_files_are_named(tmp_path):
     with pytest.raises(D.ImageReadError, match=rf"^cannot read image '{folder / 'disp1.png'}': expected a grey disparity map, got colour$"):
         D.load_middlebury2005("Art", tmp_path)
     _write_art(tmp_path, disp=np.full((12, 17), 16, np.uint8))
-    with pytest.raises(DataNotFoundError, match=r"^scene 'middlebury2005/Art': views and disparity differ in shape \[\(12, 16\), \(12, 17\)\]; are the files intact\?$"):
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': ground truth '{folder / 'disp1.png'}' is 17x12 px but the views are 16x12 px; are the files intact\?$"):
+        D.load_middlebury2005("Art", tmp_path)
+    _write_art(tmp_path, disp=np.zeros((12, 16), np.uint8))  # every pixel coded unknown
+    with pytest.raises(D.DataFileError, match=r"^scene 'middlebury2005/Art': ground truth '.*disp1.png' holds no known disparity \(every pixel is coded unknown\); is the file intact\?$"):
+        D.load_middlebury2005("Art", tmp_path)
+    _write_art(tmp_path)
+    cv2.imwrite(str(folder / "view4.png"), np.zeros((12, 15), np.uint8))
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': view '{folder / 'view4.png'}' is 15x12 px, '{folder / 'view0.png'}' 16x12 px; are the files intact\?$"):
         D.load_middlebury2005("Art", tmp_path)
     moto = tmp_path / "skimage-motorcycle"
     moto.mkdir()

@@ -456,7 +456,10 @@ def test_resolve_dataset_names_groups_and_lists(tmp_path):
     root = _fake_root(tmp_path / "data", ["tsukuba", "middlebury2005/Art", "motorcycle"])
     assert resolve_dataset("all", data=root) == (root, ["tsukuba", "middlebury2005/Art", "motorcycle"])
     assert resolve_dataset(" ALL ", data=root) == (root, ["tsukuba", "middlebury2005/Art", "motorcycle"])
-    # a group is its five scenes, present or not (loading names a missing file)
+    # a group is its five scenes: one missing is named before any scene runs
+    with pytest.raises(DataNotFoundError, match=r"^scene 'middlebury2005/Books': data files missing: .*Books/disp1.png'.* and 6 more \(check"):
+        resolve_dataset("middlebury2005", data=root)
+    root = _fake_root(tmp_path / "every", ["tsukuba", "teddy", *MB2005, "motorcycle"])
     assert resolve_dataset("middlebury2005", data=root) == (root, MB2005)
     for alias, name in (
         ("Art", "middlebury2005/Art"),
@@ -609,7 +612,7 @@ def test_cli_unknown_dataset_one_line(capsys, tmp_path):
 @needs_cli
 def test_cli_missing_data_root(capsys, tmp_path):
     code, out, err = run_cli(capsys, "evaluate", "tsukuba", "--data", str(tmp_path / "absent"))
-    assert code == 5 and err.count("\n") == 1 and "data folder not found" in err
+    assert code == 5 and err == f"nfdepth: error: --data '{tmp_path / 'absent'}' is not a directory; expected the data folder (as filled by `nfdepth fetch-data --dest DIR`)\n"
 
 
 @needs_cli
@@ -620,6 +623,48 @@ def test_cli_bad_views_and_json(capsys, tmp_path):
     assert code == 2 and err.strip() == "nfdepth: error: --cost-step-px must be a positive number, got 0"
     code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--json", str(tmp_path / "no" / "r.json"))
     assert code == 4 and "does not exist" in err
+
+
+def _touch_scene(root, sub, files):
+    folder = root / sub
+    folder.mkdir(parents=True, exist_ok=True)
+    for f in files:
+        (folder / f).write_bytes(b"x")  # only their presence is checked here
+
+
+_MB2005_FILES = ["disp1.png", "dmin.txt"] + [f"view{k}.png" for k in range(7)]
+
+
+def test_an_incomplete_scene_is_skipped_with_a_warning_or_refused_when_named(tmp_path):
+    """'all' and a data root take the complete scenes and name each incomplete one; a named scene or group
+    with a file missing is refused before any scene runs."""
+    from nfdepth.evaluate import resolve_dataset
+
+    _touch_scene(tmp_path, "middlebury2005/Art", _MB2005_FILES)
+    _touch_scene(tmp_path, "middlebury2005/Books", [f for f in _MB2005_FILES if f != "view2.png"])
+    for dataset, data in (("all", tmp_path), (tmp_path, None)):
+        with pytest.warns(UserWarning, match=rf"^scene 'middlebury2005/Books' skipped: its folder '{tmp_path / 'middlebury2005' / 'Books'}' lacks view2.png$"):
+            root, names = resolve_dataset(dataset, data)
+        assert names == ["middlebury2005/Art"] and root == tmp_path.resolve()
+    for dataset in ("middlebury2005", "books", tmp_path / "middlebury2005"):
+        with pytest.raises(DataNotFoundError, match=r"^scene 'middlebury2005/Books': data file missing: '.*view2.png' \(check the data folder"):
+            resolve_dataset(dataset, tmp_path if isinstance(dataset, str) else None)
+
+
+@needs_cli
+def test_cli_evaluate_refuses_a_group_with_a_file_missing_before_its_first_scene(capsys, tmp_path):
+    _touch_scene(tmp_path, "middlebury2005/Art", _MB2005_FILES)  # would run first (and fail: not images)
+    _touch_scene(tmp_path, "middlebury2005/Books", _MB2005_FILES[:-1])
+    code, out, err = run_cli(capsys, "evaluate", "middlebury2005", "--data", str(tmp_path), "--methods", "sgbm")
+    assert code == 5 and out == ""
+    assert err == f"nfdepth: error: scene 'middlebury2005/Books': data file missing: '{tmp_path / 'middlebury2005' / 'Books' / 'view6.png'}' (check the data folder, or download it with `nfdepth fetch-data`)\n"
+
+
+@needs_cli
+def test_cli_evaluate_json_beside_a_file(capsys, tmp_path):
+    (tmp_path / "afile").write_text("")
+    code, _, err = run_cli(capsys, "evaluate", "tsukuba", "--json", str(tmp_path / "afile" / "r.json"))
+    assert code == 4 and err == f"nfdepth: error: --json '{tmp_path / 'afile' / 'r.json'}': '{tmp_path / 'afile'}' is not a directory\n"
 
 
 def _real_root():
@@ -644,6 +689,9 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     assert isinstance(data, list) and len(data) == 1
     res = data[0]
     assert res["scene"] == "tsukuba" and res["views"] == [1, 2, 3] and res["shape"] == [288, 384]
+    import nfdepth
+
+    assert res["nfdepth_version"] == nfdepth.__version__
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
     keys = {
         "points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",

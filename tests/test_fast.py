@@ -239,6 +239,15 @@ def test_bench_records_well_formed(backend):
         assert f"cv_sgbm_covering ({r['disparities']} disparities)" in table
 
 
+def test_bench_says_when_the_middlebury_scene_is_missing(monkeypatch, tmp_path):
+    """Without the data the Art scene is a skipped record (and a warning), not silently absent."""
+    monkeypatch.setenv("NFDEPTH_DATA", str(tmp_path / "absent"))
+    with pytest.warns(UserWarning, match=r"^the middlebury-art scene is skipped: the Middlebury 2005 Art views were not found \(set NFDEPTH_DATA.*\); only the rendered scene is timed$"):
+        records = bench.run_benchmarks(sizes=[(60, 80)], repeats=1, scenes=("middlebury-art",))
+    assert len(records) == 1 and records[0]["median_ms"] is None and records[0]["skipped"].startswith("skipped: the Middlebury 2005 Art views were not found")
+    assert "| all cases | middlebury-art | 80×60 | 0.0 | skipped: the Middlebury" in bench.render_markdown(records)
+
+
 def test_bench_options_are_checked_before_anything_runs(monkeypatch):
     """threads beyond the cores is refused before OpenCV is told (10**9 started thousands of workers)."""
     told = []

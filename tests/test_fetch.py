@@ -276,7 +276,23 @@ def test_cli_unreachable_mirror(capsys, tmp_path):
     code, _out, err = run_cli(capsys, "fetch-data", "--set", "tsukuba", "--mirror", url, "--dest", tmp_path / "data")
     assert code == 5 and err.count("\n") == 1 and "Traceback" not in err
     assert err.startswith("nfdepth: error: could not download 'tsukuba/scene1.row3.col1.ppm'") and "connection failed" in err
-    assert [p for p in (tmp_path / "data").rglob("*") if p.is_file()] == []
+    assert list(tmp_path.iterdir()) == []  # nor the folders it made for the files
+
+
+@pytest.mark.parametrize("nested", [False, True])
+def test_cli_unreachable_ftp_mirror(capsys, tmp_path, nested):
+    """An ftp:// mirror's failure is the same one line and exit code as http's (it was a bare socket error, exit 4);
+    its port reaches the connection (pooch took 'host:port' for the host name)."""
+    pytest.importorskip("pooch")
+    port = _closed_port()
+    dest = tmp_path / "a" / "b" if nested else tmp_path / "data"
+    code, _out, err = run_cli(capsys, "fetch-data", "--set", "tsukuba", "--mirror", f"ftp://127.0.0.1:{port}/", "--dest", dest)
+    assert code == 5
+    head = f"nfdepth: error: could not download 'tsukuba/scene1.row3.col1.ppm' from ftp://127.0.0.1:{port}/tsukuba/scene1.row3.col1.ppm: "
+    assert re.match(re.escape(head) + r"connection failed \(\[Errno \d+\] Connection refused\); nothing was written for it", err), err
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match=r"^mirror 'ftp://127.0.0.1:x/' has a bad port \(Port could not be cast"):
+        F.fetch_data(tmp_path, sets="tsukuba", mirror="ftp://127.0.0.1:x/")
 
 
 def test_cli_dest_is_a_file(capsys, tmp_path):

@@ -208,6 +208,27 @@ def test_figure_file_mode_follows_umask(tmp_path):
     assert _no_temp_files(tmp_path / "sub")
 
 
+def test_colour_bar_range_checks_and_clipping_arrows():
+    """The figure's range is checked as the plain PNG's is; values beyond it are drawn at its ends and the bar says so."""
+    from nfdepth import plot
+
+    ramp = np.arange(100, dtype=float).reshape(10, 10)
+    with pytest.raises(ValueError, match=r"^vmax must be >= vmin, got vmin=5, vmax=1$"):
+        plot.colormap_panel(ramp, title="r", unit="px", vmin=5, vmax=1)
+    with pytest.raises(ValueError, match=r"^vmin must be a finite number, got nan$"):
+        plot.colormap_panel(ramp, title="r", unit="px", vmin=float("nan"))
+
+    def extend(**kw):
+        fig = plot.colormap_panel(ramp, title="r", unit="px", **kw)
+        (image,) = fig.axes[0].images
+        return fig.axes[1]._colorbar.extend, image.get_clim()
+
+    assert extend() == ("both", (pytest.approx(0.99), pytest.approx(98.01)))  # the 1st-99th percentiles
+    assert extend(vmin=-1, vmax=99) == ("neither", (-1, 99))
+    assert extend(vmin=-1, vmax=50) == ("max", (-1, 50))
+    assert extend(vmin=500)[0] == "min"  # one end given beyond the data: the other follows it (no vmax < vmin error)
+
+
 def test_atomic_write_file_mode_follows_umask(tmp_path):
     p = atomic_write(tmp_path / "m.bin", lambda fh: fh.write(b"abc"))
     mask = os.umask(0o022)

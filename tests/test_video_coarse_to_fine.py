@@ -388,7 +388,7 @@ def test_cli_levels(tmp_path, capsys, monkeypatch):
     rig.write_text("[camera]\nfocal_px = 100\nwidth_px = 200\nheight_px = 200\n[video]\nvelocity = [16.0, 0.0, 0.0]\n")
     assert main(["video", str(folder), "--rig", str(rig), "--out", str(tmp_path / "bad.npz"), "--levels", "9", "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "levels = 9 halves a 200x200 frame below 8 px: expected 1 to 5" in err[0], err
+    assert len(err) == 1 and "--levels 9 halves a 200x200 frame below 8 px: expected 1 to 5" in err[0], err
     assert not (tmp_path / "bad.npz").exists()
     rel = {}
     for levels in ("1", "4"):

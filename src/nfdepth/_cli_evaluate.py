@@ -15,6 +15,7 @@ from .evaluate import DEFAULT_METHODS, METHODS, evaluation_rows, view_size_probl
 EXIT_OK = 0
 EXIT_USAGE = 2
 EXIT_WRITE = 4
+EXIT_DATA = 5
 
 
 def register(sub, CLIError) -> None:
@@ -40,7 +41,10 @@ def register(sub, CLIError) -> None:
     p.add_argument("--methods", nargs="+", choices=METHODS, default=list(DEFAULT_METHODS), metavar="M",
                    help=f"methods (default: {' '.join(DEFAULT_METHODS)}; choices: {', '.join(METHODS)})")
     p.add_argument("--downsample", type=int, default=1, metavar="K", help="area-downsample by K first (default 1: full size)")
-    p.add_argument("--json", metavar="FILE", help="write the results as JSON (a list, one entry per scene)")
+    p.add_argument(
+        "--json", metavar="FILE",
+        help="write the results as JSON: a list, one entry per scene (its fields: help(nfdepth.evaluate.evaluate_scene) and disparity_errors; rates as fractions, px and s)",
+    )
     p.add_argument("--maps", metavar="DIR", help="write |error| maps (PNG, one per scene and method) here")
     p.add_argument("--cost-step-px", type=float, metavar="PX", help="nfdepth's cost-volume candidate spacing (as nfdepth stereo --cost-step-px; default 0.5)")
 
@@ -57,6 +61,8 @@ def _check_json_path(path: str, CLIError) -> Path:
     if out.is_dir():
         raise CLIError(f"--json '{out}' is a directory; expected a file path", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise CLIError(f"--json '{out}': '{parent}' is not a directory", EXIT_WRITE)
     if not parent.is_dir():
         raise CLIError(f"--json '{out}': directory '{parent}' does not exist", EXIT_WRITE)
     return out
@@ -85,6 +91,8 @@ def _fmt_table(res) -> str:
         return "     -" if x is None or x != x else f"{100 * x:5.{digits}f}%"
 
     share = res.get("near_steps_share")
+    rows = [(f"{method} ({label})", e, runtime_s) for method, label, e, runtime_s in evaluation_rows(res)]
+    width = max([34, *(len(label) for label, _, _ in rows)])  # the columns stay aligned with a long method name
     lines = [
         f"{res['scene']}: {res['view_count']} views {res['views']}, reference view {res['reference_index']}, "
         f"{res['shape'][1]}x{res['shape'][0]} px" + (f" (downsampled {res['downsample']}x)" if res["downsample"] > 1 else "")
@@ -93,17 +101,16 @@ def _fmt_table(res) -> str:
         + (f"; {pct(share).strip()} of them near a depth step" if share is not None and math.isfinite(share) else "")
         + "".join(f"; nfdepth {key} = {value:g}" for key, value in sorted(res.get("stereo_options", {}).items())),
         (
-            f"  {'method':<34} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
+            f"  {'method':<{width}} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
             f"{'bias px':>7} {'err/std':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
         ),
     ]
-    for method, label, e, runtime_s in evaluation_rows(res):
-        label = f"{method} ({label})"
+    for label, e, runtime_s in rows:
         bias = e.get("bias_px", float("nan"))
         z = e.get("median_z")
         z = float("nan") if z is None else z
         lines.append(
-            f"  {label:<34} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e.get('truth_rounding_rel'), 2):>8} "
+            f"  {label:<{width}} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e.get('truth_rounding_rel'), 2):>8} "
             f"{pct(e['p90_rel'], 2):>7} {pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} "
             f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {'      -' if math.isnan(z) else format(z, '7.2f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
             f"{runtime_s:>7.3f}s"
@@ -114,14 +121,14 @@ def _fmt_table(res) -> str:
 def _cmd_evaluate(args, CLIError) -> int:
     from . import datasets
     from .evaluate import error_map_png, evaluate_scene, resolve_dataset, select_views, to_jsonable
-    from .io import atomic_write
+    from .io import atomic_write, make_output_folder
 
     views = args.views.strip().lower()
     if views not in ("all", "three"):
         raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
     if args.downsample < 1:
         raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
-    from .cli import _positive
+    from .cli import _as_option, _positive
 
     cost_step = _positive("--cost-step-px", args.cost_step_px)
     stereo_options = {} if cost_step is None else {"cost_step_px": cost_step}
@@ -130,6 +137,8 @@ def _cmd_evaluate(args, CLIError) -> int:
     if maps is not None and maps.exists() and not maps.is_dir():
         raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)
     select_views(3, 1, views)
+    if args.data is not None and not Path(args.data).expanduser().is_dir():
+        raise CLIError(f"--data '{args.data}' is not a directory; expected the data folder (as filled by `nfdepth fetch-data --dest DIR`)", EXIT_DATA)
     root, names = resolve_dataset(args.dataset, args.data)
     loaded = {}
     if args.downsample > 1 and len(names) > 1:  # before any output: the factor must fit every scene (kept, not read twice)
@@ -140,10 +149,13 @@ def _cmd_evaluate(args, CLIError) -> int:
     for name in names:
         scene = loaded.pop(name) if name in loaded else datasets.load_scene(name, root)
         _check_downsample(args.downsample, scene, CLIError, args.methods)
-        res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None, stereo_options=stereo_options)
+        try:
+            res = evaluate_scene(scene, views=views, methods=args.methods, downsample=args.downsample, keep_maps=maps is not None, stereo_options=stereo_options)
+        except ValueError as exc:  # the step is checked against the range each scene's pyramid finds
+            raise _as_option(exc, "cost_step_px", "--cost-step-px") from None
         print(_fmt_table(res), flush=True)
         if maps is not None:
-            maps.mkdir(parents=True, exist_ok=True)
+            make_output_folder(maps, parents=True)  # removed again if the run fails
             stem = f"{res['scene'].replace('/', '_')}_{res['view_count']}views"
             for method, disp in res["maps"].items():
                 error_map_png(maps / f"{stem}_{method}.png", disp, res["truth"], title=f"{res['scene']} {method}: |d - d_true|")

@@ -474,7 +474,7 @@ def register(sub, CLIError) -> None:
                    " with videos OUT.npz or a folder (depth_NNNNNN.tif, depth_std_NNNNNN.tif per crossing)")
     p.add_argument("--uncertainty", metavar="FILE", help="also write the depth standard deviation here")
     p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG")
-    p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (and, with the std, PNG_std.png); videos: the last crossing")
+    p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar and, where the run writes the std (five images: --uncertainty; videos: always, in the NPZ), PNG_std.png; videos: the last crossing")
     p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")
     p.add_argument("--csv", metavar="FILE", help="also write the points as CSV: row,col,depth,depth_std (sub-pixel positions)")

@@ -59,8 +59,11 @@ def check_frame_size(name: str, shape) -> None:
     pixels = int(shape[0]) * int(shape[1])
     limit = max_pixels()
     if pixels > limit:
+        digits = 1  # enough to tell the two apart (0.11 above 0.1, not 0.1 above 0.1)
+        while digits < 7 and f"{pixels / 1e6:.{digits}f}" == f"{limit / 1e6:.{digits}f}":
+            digits += 1
         msg = (
-            f"{name} has {shape[1]}x{shape[0]} px (width x height) = {pixels / 1e6:.1f} megapixels, above the limit of "
+            f"{name} has {shape[1]}x{shape[0]} px (width x height) = {pixels / 1e6:.{digits}f} megapixels, above the limit of "
             f"{limit / 1e6:g} megapixels per frame (working memory is about 130-370 bytes per pixel); "
             f"downsample the images or raise the limit with the environment variable {MAX_PIXELS_ENV}"
         )

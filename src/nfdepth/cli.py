@@ -9,13 +9,16 @@ code  meaning
 0     success
 1     unexpected internal error (a bug: please report it)
 2     bad argument or bad input value
-3     an input file could not be read
+3     an input file could not be read (or a data set's file is broken)
 4     an output could not be written, or exists (use ``--force``)
 5     data set not found, or its download failed (``fetch-data``)
 130   interrupted (Ctrl-C, SIGINT); no partial output is left behind (the
       outputs the run had already completed are removed)
 143   terminated (SIGTERM); the same
 ====  ==========================================================
+
+Standard output closed early (``nfdepth evaluate ... | head -1``) is not an
+error: the run goes on without printing and writes its files.
 """
 
 from __future__ import annotations
@@ -65,6 +68,48 @@ class _Terminated(KeyboardInterrupt):
     """Raised by the SIGTERM handler so that clean-up (temporary files) runs."""
 
 
+class _PipeGuard:
+    """Standard output that outlives a closed pipe: writes after the reader has gone are dropped.
+
+    ``nfdepth evaluate tsukuba --json r.json | head -1`` closes the pipe after
+    one line; the run still finishes and writes ``r.json`` (a failed write
+    to stdout used to abort the run and roll back its outputs).
+    """
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.closed = False  # the reader has gone
+
+    def write(self, text):
+        if not self.closed:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._reader_gone()
+        return len(text)
+
+    def flush(self):
+        if not self.closed:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._reader_gone()
+
+    def _reader_gone(self):
+        self.closed = True
+        try:  # what the stream still buffers would fail again when Python flushes it at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(devnull, self._stream.fileno())
+            finally:
+                os.close(devnull)
+        except (OSError, ValueError, AttributeError):  # not a file descriptor (a test's capture)
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
 def _on_sigterm(signum, frame):  # pragma: no cover - exercised in a subprocess test
     raise _Terminated()
 
@@ -106,7 +151,7 @@ def _classify(exc: BaseException) -> int:
     name = type(exc).__name__
     if name == "ImageRangeError":  # the file was read; its values do not fit float32
         return EXIT_USAGE
-    if name in ("ImageReadError", "InputReadError"):
+    if name in ("ImageReadError", "InputReadError", "DataFileError"):  # a file there, but broken
         return EXIT_READ
     if name in ("OutputExistsError", "OutputWriteError"):
         return EXIT_WRITE
@@ -164,7 +209,7 @@ def _write_paper_figures(out_dir: Path, res) -> list[Path]:
     if name == "static":
         ref = scene.reference_index
         written.append(plot.save_figure(plot.image_panel(frames[ref], title=f"{name}: I{ref + 1}"), out_dir / f"{name}_a_image.png"))
-        written.append(plot.save_figure(plot.difference_panel(frames[ref - 1], frames[ref + 1], title=f"{name}: dp"), out_dir / f"{name}_a_dp.png"))
+        written.append(plot.save_figure(plot.difference_panel(frames[ref - 1], frames[ref + 1], title=f"{name}: dp (I{ref + 2} - I{ref})"), out_dir / f"{name}_a_dp.png"))
         flows = {"Vn": r.delta_vn}
     else:
         written.append(plot.save_figure(plot.image_panel(frames[2], title=f"{name}: I3"), out_dir / f"{name}_a_I3.png"))
@@ -172,7 +217,7 @@ def _write_paper_figures(out_dir: Path, res) -> list[Path]:
         written.append(plot.save_figure(plot.difference_panel(frames[0], frames[4], title=f"{name}: dpm (I5 - I1)"), out_dir / f"{name}_a_dpm.png"))
         m = r.selection.mask
         flows = {"Vnr": r.delta_vn, "Vns": r.flows["stationary"][m], "Vnm": r.flows["moving"][m]}
-    scale = None
+    scale = plot.needle_scale_px(*flows.values())  # one scale: the panels compare
     for key, flow in flows.items():
         fig = plot.needle_panel(r.rows, r.cols, r.alpha, flow, shape=shape, title=f"{name}: {key}", scale_px=scale)
         written.append(plot.save_figure(fig, out_dir / f"{name}_b_{key}.png"))
@@ -185,7 +230,7 @@ def _write_paper_figures(out_dir: Path, res) -> list[Path]:
 
 
 def _cmd_reproduce(args) -> int:
-    from .experiments import EXPERIMENTS, run_paper_experiment
+    from .experiments import DEFAULT_SIGMA_PX, EXPERIMENTS, run_paper_experiment
 
     if args.seed < 0:
         raise CLIError(f"--seed must be an integer >= 0 (the noise generator's seed), got {args.seed}")
@@ -207,11 +252,18 @@ def _cmd_reproduce(args) -> int:
         literal = {n: run_paper_experiment(n, stencil="paper", **common) for n in names}
     print(f"Paper experiments (stencil={args.stencil}, noise std={args.noise:g}, seed={args.seed}); relative errors, corners excluded")
     print(_reproduce_table(results, literal))
+    honest = ", ".join(f"{n} {res.median_error_over_std:.2f}" for n, res in results.items())
+    print(f"error bar, median |depth error| / std (0.67 when calibrated): {honest}")
     if args.json:
+        from . import __version__
+
         payload = {}
         for n, res in results.items():
             entry = res.summary()
             entry["stencil"] = args.stencil
+            # what made these figures (two runs with other seeds must be told apart)
+            sigma = DEFAULT_SIGMA_PX[n] if args.sigma_px is None else args.sigma_px
+            entry["settings"] = {"nfdepth_version": __version__, **common, "sigma_px": sigma, "stencil": args.stencil}
             if literal is not None:
                 entry["literal_stencil"] = literal[n].summary()
             payload[n] = entry
@@ -296,7 +348,7 @@ def _cmd_demo(args) -> int:
     )
     print(f"  the same from the files: nfdepth stereo {' '.join(str(n) for n in names)} --edges-only --focal-px 100 --baseline 2 --out depth.pfm --ply points.ply")
     calibrated_names = " ".join(str(example / f"calibrated_view{k}.png") for k in range(len(calibrated.views)))
-    print(f"  a calibrated row that is not rectified: nfdepth stereo {calibrated_names} --cameras {example / 'calibrated_cameras.toml'} --out depth.pfm")
+    print(f"  a calibrated row that is not rectified: nfdepth stereo {calibrated_names} --cameras {example / 'calibrated_cameras.toml'} --out calibrated_depth.pfm")
     print(f"figures written to {out}/")
     return EXIT_OK
 
@@ -352,8 +404,8 @@ def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--ou
         raise CLIError(f"{what} '{out}' exists; use --force to overwrite it", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        problem = "is not a directory" if parent.exists() else "does not exist"
-        raise CLIError(f"{what} '{out}': directory '{parent}' {problem}", EXIT_WRITE)
+        problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+        raise CLIError(f"{what} '{out}': {problem}", EXIT_WRITE)
     return out
 
 
@@ -363,6 +415,14 @@ def _positive(name: str, value):
     if not np.isfinite(value) or value <= 0:
         raise CLIError(f"{name} must be a positive number, got {value:g}")
     return float(value)
+
+
+def _as_option(exc: ValueError, parameter: str, option: str) -> ValueError:
+    """A library error that opens with ``parameter = ...``, told as the command line's ``option`` (else ``exc`` itself)."""
+    text = str(exc)
+    if text.startswith(f"{parameter} = "):
+        return CLIError(f"{option} {text[len(parameter) + 3 :]}", EXIT_USAGE)
+    return exc
 
 
 def _depth_range(value):
@@ -607,7 +667,7 @@ def _cmd_stereo(args) -> int:
             )
     except ValueError as exc:
         if depth_range is None:
-            raise
+            raise _as_option(exc, "cost_step_px", "--cost-step-px") from None
         lo, hi = args.disparity_range
         raise CLIError(f"--depth-range {depth_range[0]:g} {depth_range[1]:g} (disparities {lo:.4g}..{hi:.4g} px): {exc}; widen or move the depth range") from None
     filled = None
@@ -679,7 +739,14 @@ def _cmd_view(args) -> int:
     from . import plot
 
     out = _check_output(args.out or str(Path(args.file).with_suffix(".png")), force=args.force, exts=(".png",), inputs=[args.file])
+    for name, value in (("--vmin", args.vmin), ("--vmax", args.vmax)):
+        if value is not None and not np.isfinite(value):
+            raise CLIError(f"{name} must be a finite number, got {value:g}")
+    if args.vmin is not None and args.vmax is not None and args.vmax < args.vmin:
+        raise CLIError(f"--vmax must be >= --vmin, got --vmin {args.vmin:g} --vmax {args.vmax:g}")
     data = read_image(args.file, dtype=np.float64)
+    if not np.isfinite(data).any():
+        warnings.warn(f"'{args.file}' holds no finite value (all unknown): the PNG is all black", UserWarning, stacklevel=1)
     if args.colorbar:
         fig = plot.colormap_panel(data, title=Path(args.file).name, unit=args.unit, vmin=args.vmin, vmax=args.vmax)
         if out.exists() and not args.force:
@@ -712,7 +779,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = _Parser(prog="nfdepth", description="Depth from relative normal flow (dynamic and static stereo).")
     parser.add_argument("--version", action="version", version=f"nfdepth {__version__}")
-    parser.add_argument("--debug", action="store_true", help="show the full traceback on errors")
+    parser.add_argument("--debug", action="store_true", help="show the full traceback on errors (anywhere on the line)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     p = sub.add_parser("demo", help="render the paper's pyramid scenes, recover depth, write figures")
@@ -720,7 +787,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_demo)
 
     p = sub.add_parser("reproduce", help="the paper's experiments 1-4 and static stereo, next to its numbers")
-    p.add_argument("--json", metavar="FILE", help="write the figures as JSON")
+    p.add_argument("--json", metavar="FILE", help="write the numbers of the table (and the settings that made them) as JSON")
     p.add_argument("--out", metavar="DIR", help="write the paper's figures as PNG files here")
     p.add_argument("--stencil", choices=("matched", "simpson", "paper"), default="matched", help="gradient stencil (default matched)")
     p.add_argument("--noise", type=float, default=0.0, metavar="STD", help="Gaussian image noise, grey levels")
@@ -806,10 +873,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("view", help="turn a .pfm/.tif/.npy map (or any image) into a colour PNG")
     p.add_argument("file", help="the map to show")
     p.add_argument("--out", metavar="PNG", help="output PNG (default: FILE with .png)")
-    p.add_argument("--vmin", type=float)
-    p.add_argument("--vmax", type=float)
-    p.add_argument("--colorbar", action="store_true", help="draw a figure with a colour bar")
-    p.add_argument("--unit", default="px", help="colour-bar label (default px)")
+    p.add_argument("--vmin", type=float, metavar="V", help="value drawn at the colour map's low end (default: the map's minimum; with --colorbar its 1st percentile)")
+    p.add_argument("--vmax", type=float, metavar="V", help="value drawn at the high end (default: the maximum; with --colorbar the 99th percentile)")
+    p.add_argument("--colorbar", action="store_true", help="draw a figure with a colour bar (an arrow at an end marks values beyond it)")
+    p.add_argument("--unit", default="value", help="colour-bar label, e.g. 'disparity (px)' or 'depth (m)' (default: value)")
     p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
     p.set_defaults(func=_cmd_view)
 
@@ -821,6 +888,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     for module in _PLUGIN_COMMANDS:
         importlib.import_module(f"nfdepth.{module}").register(sub, CLIError)
+    for command in sub.choices.values():  # the library's parameter names, told as each command's options
+        names = {a.dest: max(a.option_strings, key=len) for a in command._actions if a.option_strings and a.dest != "help"}
+        command.set_defaults(_option_names={**names, **_PARAMETER_OPTIONS})
     return parser
 
 
@@ -834,12 +904,16 @@ def main(argv=None) -> int:
     io.COMPLETED_WRITES = []  # this run's outputs, removed if it is interrupted or fails
     if threading.current_thread() is threading.main_thread():
         previous_sigterm = signal.signal(signal.SIGTERM, _on_sigterm)
+    stdout = sys.stdout
+    if stdout is not None:
+        sys.stdout = _PipeGuard(stdout)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             warnings.showwarning = _one_line_warning
             return _main(argv, debug)
     finally:
+        sys.stdout = stdout
         io.COMPLETED_WRITES = None  # recorded during a run only
         if previous_sigterm is not None:
             signal.signal(signal.SIGTERM, previous_sigterm)
@@ -872,10 +946,44 @@ def _roll_back_outputs(event: str = "the interruption") -> str:
     return note
 
 
+#: Library parameters whose option has another name (the rest are their option's dest).
+_PARAMETER_OPTIONS = {"noise_std": "--noise"}
+
+
+def _option_text(text: str, args) -> str:
+    """A library message that opens with a parameter's name (``sigma_px must ...``, ``noise_std = 1e9 ...``), told with its option's."""
+    names = getattr(args, "_option_names", None) or {}
+    first = re.match(r"^([a-z][a-z0-9_]*)(?= = | must | should )", text)  # a check on the value, not a file it names
+    if first and first.group(1) in names:
+        option = names[first.group(1)]
+        rest = text[first.end() :]
+        return option + (rest[2:] if rest.startswith(" = ") else rest)
+    return text
+
+
+#: OSErrors as the system raises them (the library's own errors carry their message)
+_RAW_OS_ERRORS = (OSError, PermissionError, FileNotFoundError, FileExistsError, NotADirectoryError, IsADirectoryError)
+
+
+def _refuse_empty(argv) -> None:
+    """An empty argument (``--out ""``, an unset shell variable) is refused: ``Path("")`` is the current folder."""
+    for i, arg in enumerate(argv):
+        if arg.strip() == "" or (arg.startswith("--") and arg.endswith("=")):
+            if arg.startswith("--"):
+                name = arg[:-1]
+            elif i > 0 and argv[i - 1].startswith("-") and not _NEGATIVE_NUMBER.match(argv[i - 1]):
+                name = argv[i - 1]
+            else:
+                name = f"argument {i + 1}"
+            raise CLIError(f"{name} is empty ({arg!r}); expected a value (an unset shell variable?)")
+
+
 def _main(argv, debug: bool) -> int:
+    args = None
     try:
         parser = build_parser()
-        args = parser.parse_args(argv)
+        _refuse_empty(argv)
+        args = parser.parse_args([a for a in argv if a != "--debug"])  # taken anywhere on the line (main reads it)
         if not getattr(args, "func", None):
             parser.print_help()
             return EXIT_USAGE
@@ -904,6 +1012,10 @@ def _main(argv, debug: bool) -> int:
             traceback.print_exc(file=sys.stderr)
         code = _classify(exc)
         text = " ".join(str(exc).split()) or type(exc).__name__
+        if type(exc) in _RAW_OS_ERRORS and exc.filename and exc.strerror:  # not "[Errno 1] Operation not permitted: 'x'"
+            text = f"cannot {'read' if code == EXIT_READ else 'write'} '{exc.filename}': {exc.strerror}"
+        if code == EXIT_USAGE:
+            text = _option_text(text, args)
         if code == EXIT_INTERNAL:
             text = f"internal error ({type(exc).__name__}): {text}; rerun with --debug and report it"
         # a failed run leaves none of its outputs, as an interrupted one

@@ -40,10 +40,12 @@ from .io import ImageReadError, read_image
 
 __all__ = [
     "DataNotFoundError",
+    "DataFileError",
     "MultiViewScene",
     "MIDDLEBURY2005_SCENES",
     "data_root",
     "list_scenes",
+    "missing_scene_files",
     "load_scene",
     "load_tsukuba",
     "load_teddy",
@@ -71,6 +73,10 @@ _MOTORCYCLE_SOURCE = (
 
 class DataNotFoundError(NFDepthError):
     """The real data (or one of its files) could not be found."""
+
+
+class DataFileError(DataNotFoundError):
+    """A data set's file is there but unusable (unreadable, another size than the views, no known disparity)."""
 
 
 # ------------------------------------------------------------------ the root
@@ -305,10 +311,22 @@ def _read_coded_disparity(path: Path, divisor: float) -> np.ndarray:
     return d
 
 
-def _check_shapes(name: str, views, disparity) -> None:
-    shapes = {v.shape for v in views} | {disparity.shape}
-    if len(shapes) != 1:
-        raise DataNotFoundError(f"scene {name!r}: views and disparity differ in shape {sorted(shapes)}; are the files intact?")
+def _size(shape) -> str:
+    return f"{shape[1]}x{shape[0]} px"
+
+
+def _check_shapes(name: str, views, disparity, paths, disparity_path) -> None:
+    """The views of one size and the ground truth of theirs, with at least one known disparity (else :class:`DataFileError`)."""
+    first = views[0].shape
+    for view, path in zip(views, paths):
+        if view.shape != first:
+            raise DataFileError(f"scene {name!r}: view '{path}' is {_size(view.shape)}, '{paths[0]}' {_size(first)}; are the files intact?")
+    if disparity.shape != first:
+        raise DataFileError(
+            f"scene {name!r}: ground truth '{disparity_path}' is {_size(disparity.shape)} but the views are {_size(first)}; are the files intact?"
+        )
+    if not np.isfinite(disparity).any():
+        raise DataFileError(f"scene {name!r}: ground truth '{disparity_path}' holds no known disparity (every pixel is coded unknown); is the file intact?")
 
 
 def load_tsukuba(root=None) -> MultiViewScene:
@@ -323,7 +341,7 @@ def load_tsukuba(root=None) -> MultiViewScene:
     _require([*views_p, disp_p])
     views = _read_views(views_p)
     disp = _read_coded_disparity(disp_p, 16.0)
-    _check_shapes("tsukuba", views, disp)
+    _check_shapes("tsukuba", views, disp, views_p, disp_p)
     # hand-labelled whole-pixel layers: every v is a multiple of 16
     return MultiViewScene("tsukuba", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TSUKUBA_SOURCE, truth_step_px=1.0)
 
@@ -341,7 +359,7 @@ def load_teddy(root=None) -> MultiViewScene:
     _require([*views_p, disp_p])
     views = _read_views(views_p)
     disp = _read_coded_disparity(disp_p, 16.0)
-    _check_shapes("teddy", views, disp)
+    _check_shapes("teddy", views, disp, views_p, disp_p)
     return MultiViewScene("teddy", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TEDDY_SOURCE, truth_step_px=1.0 / 16.0)
 
 
@@ -381,11 +399,11 @@ def load_middlebury2005(scene: str, root=None) -> MultiViewScene:
     try:
         dmin = float(text.split()[0])
     except (ValueError, IndexError):
-        raise DataNotFoundError(f"'{dmin_p}' should hold one number (dmin in full-size px), got {text!r}") from None
+        raise DataFileError(f"'{dmin_p}' should hold one number (dmin in full-size px), got {text!r}") from None
     views = _read_views(views_p)
     disp = _read_coded_disparity(disp_p, 8.0)
     name = f"middlebury2005/{scene}"
-    _check_shapes(name, views, disp)
+    _check_shapes(name, views, disp, views_p, disp_p)
     return MultiViewScene(
         name, views, 1, disp, 1870.0, 40.0, "mm", dmin / 8.0, _read_colour(views_p[1]), _MB2005_SOURCE.format(scene=scene),
         truth_step_px=1.0 / 8.0,
@@ -408,9 +426,9 @@ def load_motorcycle(root=None) -> MultiViewScene:
         with np.load(disp_p, allow_pickle=False) as z:
             disp = np.asarray(z["arr_0"], dtype=np.float32).copy()
     except (OSError, ValueError, KeyError, EOFError) as exc:
-        raise DataNotFoundError(f"cannot read disparity '{disp_p}': {exc}") from None
+        raise DataFileError(f"cannot read disparity '{disp_p}': {exc}") from None
     disp[~np.isfinite(disp)] = np.nan
-    _check_shapes("motorcycle", views, disp)
+    _check_shapes("motorcycle", views, disp, views_p, disp_p)
     return MultiViewScene(
         "motorcycle", views, 0, disp, 994.978, 193.001, "mm", 31.086, _read_colour(views_p[0]), _MOTORCYCLE_SOURCE,
         principal_point_px=(311.193, 254.877),
@@ -445,6 +463,24 @@ def list_scenes(root=None) -> list:
     return [name for name, (sub, files) in _SCENE_FILES.items() if all((base / sub / f).is_file() for f in files)]
 
 
+def missing_scene_files(name: str, root=None) -> list:
+    """The files of scene ``name`` (as :func:`list_scenes` names it) absent under the data root; empty when it is complete.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name.
+    DataNotFoundError
+        If no data root is found.
+    """
+    if name not in _SCENE_FILES:
+        msg = f"name must be one of {', '.join(_SCENE_FILES)}, got {name!r}"
+        raise ValueError(msg)
+    sub, files = _SCENE_FILES[name]
+    folder = data_root(root) / sub
+    return [folder / f for f in files if not (folder / f).is_file()]
+
+
 def load_scene(name: str, root=None) -> MultiViewScene:
     """Load a scene by name (see :func:`list_scenes`; case-insensitive).
 
@@ -454,6 +490,9 @@ def load_scene(name: str, root=None) -> MultiViewScene:
         For an unknown name (the message lists the known ones).
     DataNotFoundError
         If the data root or one of the scene's files is missing.
+    DataFileError
+        (a DataNotFoundError) If a file is there but unusable: unreadable,
+        another size than the views, or a ground truth with no known disparity.
     """
     if not isinstance(name, str):
         msg = f"name must be a str such as 'tsukuba', got {type(name).__name__}"

@@ -36,6 +36,7 @@ least squares) and ``waxman_sinha_farneback`` (the same with Farnebäck flow).
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -527,9 +528,13 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     Returns
     -------
     dict
-        ``scene``, ``views`` (indices into the scene's row), ``view_count``,
-        ``reference_index`` (into the row), ``downsample``, ``shape``,
-        ``truth_points``, ``truth_step_px`` (the scene's, after view
+        ``nfdepth_version``, ``scene``, ``views`` (indices into the scene's
+        row), ``view_count``, ``reference_index`` (into the row),
+        ``downsample``, ``shape`` (``[rows, cols]`` of the views scored),
+        ``truth_points`` (their pixels with a known truth; an errors dict's
+        own ``truth_points`` counts the pixels it was scored over: every known
+        one, or for a peer at nfdepth's edge points those points),
+        ``truth_step_px`` (the scene's, after view
         selection and downsampling), ``stereo_options`` (as given, ``{}`` by
         default), ``near_steps_share`` (the share of the
         truth's pixels near its depth steps, :func:`depth_step_mask`) and
@@ -566,7 +571,10 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     steps = depth_step_mask(truth)
     known = np.isfinite(truth)
     max_disp = float(np.nanmax(truth)) if known.any() else None
+    from . import __version__
+
     out = {
+        "nfdepth_version": __version__,
         "scene": scene.name,
         "views": idx,
         "view_count": len(idx),
@@ -630,6 +638,35 @@ def _known_scene(name: str):
     return aliases.get(key)
 
 
+def _complete(root: Path, names: list) -> tuple:
+    """``(root, names)`` once every file of every named scene is there: a missing one is found before the first scene runs."""
+    from .datasets import DataNotFoundError, missing_scene_files
+
+    for name in names:
+        missing = missing_scene_files(name, root)
+        if missing:
+            listed = ", ".join(f"'{p}'" for p in missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3 else "")
+            msg = f"scene {name!r}: data file{'s' if len(missing) > 1 else ''} missing: {listed} (check the data folder, or download it with `nfdepth fetch-data`)"
+            raise DataNotFoundError(msg)
+    return root, names
+
+
+def _warn_incomplete(root: Path, present: list) -> list:
+    """The scenes ``present`` in a data folder; a warning names each scene whose folder is there but lacks a file (skipped)."""
+    from .datasets import _SCENE_FILES, missing_scene_files
+
+    for name, (sub, _files) in _SCENE_FILES.items():
+        if name not in present and (Path(root) / sub).is_dir():
+            missing = missing_scene_files(name, root)
+            warnings.warn(
+                f"scene {name!r} skipped: its folder '{Path(root) / sub}' lacks {', '.join(p.name for p in missing[:3])}"
+                + (f" and {len(missing) - 3} more file(s)" if len(missing) > 3 else ""),
+                UserWarning,
+                stacklevel=3,
+            )
+    return present
+
+
 def resolve_dataset(dataset, data=None) -> tuple:
     """Turn a dataset argument into ``(root, [scene names])``.
 
@@ -640,12 +677,15 @@ def resolve_dataset(dataset, data=None) -> tuple:
     set's folder (``.../tsukuba``, ``.../middlebury2005``) or a scene's
     (``.../middlebury2005/Art``).
 
+    A scene whose folder is present but incomplete is skipped with a
+    warning where every scene present is asked for (``"all"``, a data root).
+
     Raises
     ------
     ValueError
         Unknown name (the message lists the known ones).
     DataNotFoundError
-        No data root.
+        No data root, or a file of a named scene (or group) missing.
     """
     from . import datasets
 
@@ -669,26 +709,26 @@ def resolve_dataset(dataset, data=None) -> tuple:
         names = datasets.list_scenes(root)
         if not names:
             raise datasets.DataNotFoundError(f"no complete scene under data folder '{root}'")
-        return root, names
+        return root, _warn_incomplete(root, names)
     if key == "middlebury2005":
-        return datasets.data_root(data), [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES]
+        return _complete(datasets.data_root(data), [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES])
     known = _known_scene(key)
     if known is not None:
-        return datasets.data_root(data), [known]
+        return _complete(datasets.data_root(data), [known])
     path = Path(text).expanduser()
     if path.is_dir():
         path = path.resolve()
         present = datasets.list_scenes(path)
         if present:
-            return path, present
+            return path, _warn_incomplete(path, present)
         folders = {sub: name for name, (sub, _files) in datasets._SCENE_FILES.items()}
         for depth in (1, 2):
             parent = path.parents[depth - 1]
             rel = path.relative_to(parent).as_posix()
             if rel in folders:
-                return parent, [folders[rel]]
+                return _complete(parent, [folders[rel]])
         if path.name == "middlebury2005":
-            return path.parent, [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES]
+            return _complete(path.parent, [f"middlebury2005/{s}" for s in datasets.MIDDLEBURY2005_SCENES])
         msg = f"dataset folder '{path}' holds no known scene (expected a data root or one of {', '.join(folders)})"
         raise ValueError(msg)
     known_names = ", ".join(["all", "middlebury2005", *datasets._SCENE_FILES])

@@ -27,6 +27,7 @@ from .synthetic import paper_dynamic_sequence, paper_static_sequence
 
 __all__ = [
     "EXPERIMENTS",
+    "DEFAULT_SIGMA_PX",
     "PAPER_REPORTED",
     "ExperimentResult",
     "error_stats",
@@ -57,13 +58,24 @@ class ExperimentResult:
     depth_error: np.ndarray
     runtime_s: float
 
+    @property
+    def median_error_over_std(self) -> float:
+        """Median of ``|depth - true depth| / depth_std`` over the valid points: 0.67 when the error bar is calibrated."""
+        ok = self.result.valid
+        std = self.result.depth_std[ok]
+        err = np.abs(self.result.depth[ok] - self.true_depth[ok])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = err / std
+        return float(np.median(ratio)) if ratio.size else float("nan")
+
     def summary(self) -> dict:
-        """JSON-ready figures: point counts and error statistics."""
+        """JSON-ready figures: point counts, error statistics and how honest the error bar is."""
         return {
             "points": int(np.count_nonzero(self.result.valid)),
             "edge_points": len(self.result),
             "flow_rel_error": error_stats(self.flow_error),
             "depth_rel_error": error_stats(self.depth_error),
+            "median_error_over_std": self.median_error_over_std,
             "paper_max_flow_rel_error": PAPER_REPORTED[self.name],
             "runtime_s": round(self.runtime_s, 4),
         }

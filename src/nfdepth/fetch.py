@@ -25,12 +25,14 @@ themselves.
 
 from __future__ import annotations
 
+import ftplib
 import hashlib
 import os
 import re
 import sys
 from pathlib import Path
 from typing import NamedTuple
+from urllib.parse import urlsplit, urlunsplit
 
 __all__ = [
     "DATA_SETS",
@@ -299,6 +301,11 @@ def _check_mirror(mirror) -> str | None:
     if not text.lower().startswith(_MIRROR_SCHEMES) or len(text) <= len(text.split("://", 1)[0]) + 3:
         msg = f"mirror must be an http://, https:// or ftp:// URL of a folder laid out like the data folder, got {mirror!r}"
         raise ValueError(msg)
+    try:
+        urlsplit(text).port  # noqa: B018 - parsed for its check
+    except ValueError as exc:
+        msg = f"mirror {mirror!r} has a bad port ({exc}); expected a URL such as 'http://host:8080/data'"
+        raise ValueError(msg) from None
     return text
 
 
@@ -397,7 +404,8 @@ def _network_reason(exc) -> str:
     if isinstance(exc, requests.exceptions.Timeout):
         return "the connection timed out"
     found = re.search(r"\[Errno -?\d+\] [^'\")\]]+", str(exc))
-    if isinstance(exc, requests.exceptions.ConnectionError):
+    ftp = isinstance(exc, OSError) and not isinstance(exc, requests.exceptions.RequestException)  # (requests' errors are OSErrors)
+    if ftp or isinstance(exc, requests.exceptions.ConnectionError):  # ftp: an ftp:// mirror's socket error (ftplib)
         return f"connection failed ({found.group(0).strip()})" if found else "connection failed"
     return " ".join(str(exc).split())[:200] or type(exc).__name__
 
@@ -410,8 +418,14 @@ def _download(pooch, entry: DataFile, target: Path) -> None:
     logger = pooch.get_logger()
     level = logger.level
     logger.setLevel("WARNING")  # pooch logs every download at INFO level on stderr
+    url, options = entry.url, {}
+    parts = urlsplit(url)
+    if parts.scheme.lower() == "ftp" and parts.port is not None:  # pooch connects to the netloc with its downloader's port
+        url = urlunsplit(parts._replace(netloc=parts.hostname))
+        options["downloader"] = pooch.FTPDownloader(port=parts.port, progressbar=False)
+    network_errors = (requests.exceptions.RequestException, *(ftplib.all_errors if parts.scheme.lower() == "ftp" else ()))
     try:
-        pooch.retrieve(entry.url, known_hash=f"sha256:{entry.sha256}", fname=target.name, path=target.parent, progressbar=False)
+        pooch.retrieve(url, known_hash=f"sha256:{entry.sha256}", fname=target.name, path=target.parent, progressbar=False, **options)
     except ValueError as exc:  # pooch: hash mismatch; it has deleted the download
         found = re.search(r"but got ([0-9a-fA-F]+)", str(exc))
         got = found.group(1).lower() if found else "a different hash"
@@ -421,7 +435,7 @@ def _download(pooch, entry: DataFile, target: Path) -> None:
             "and report it if it persists"
         )
         raise DataDownloadError(msg, file=name, url=entry.url) from exc
-    except requests.exceptions.RequestException as exc:
+    except network_errors as exc:
         msg = (
             f"could not download '{name}' from {entry.url}: {_network_reason(exc)}; nothing was written for it. "
             "Check the network connection (or the mirror URL) and run the fetch again: the files already checked are kept"
@@ -512,7 +526,8 @@ def fetch_data(dest=None, *, sets=None, mirror=None, progress=False) -> Path:
         message says ``pip install 'nfdepth[data]'``).
     DataDownloadError
         If a download fails or does not match its known hash; nothing is
-        left under that file's name, files checked before it are kept.
+        left under that file's name, files checked before it are kept (the
+        folders this call made and left empty are removed).
     OSError
         If ``dest`` is not a folder or cannot be written.
 
@@ -534,28 +549,47 @@ def fetch_data(dest=None, *, sets=None, mirror=None, progress=False) -> Path:
         if progress:
             print(text, flush=True)
 
+    made: list = []  # the folders this call creates, outermost first: removed again, if left empty, when it fails
+
+    def make(folder: Path) -> None:
+        missing = []
+        while not folder.exists():
+            missing.append(folder)
+            folder = folder.parent
+        for f in reversed(missing):
+            f.mkdir()
+            made.append(f)
+
     pooch = None
-    for name in names:
-        entries = data_files(name, mirror=base)
-        folder = root / name
-        fetched = 0
-        for entry in entries:
-            target = folder / entry.path
-            if target.is_dir():
-                raise IsADirectoryError(f"cannot write '{target}': it is a folder; remove it and fetch again")
-            if _is_intact(target, entry):
-                continue
-            if pooch is None:
-                pooch = _import_pooch()
-            target.parent.mkdir(parents=True, exist_ok=True)
-            if target.exists():
-                target.unlink()  # another hash: a corrupt or outdated copy, replaced below
-            say(f"  downloading {name}/{entry.path} ({_human_size(entry.size)}) from {entry.url}")
-            _download(pooch, entry, target)
-            fetched += 1
-        folder.mkdir(parents=True, exist_ok=True)
-        _write_text(folder / "SHA256SUMS", _sums_text(entries))
-        _write_text(folder / "SOURCE.md", _source_text(name, base))
-        total = _human_size(sum(e.size for e in entries))
-        say(f"{name}: {len(entries)} files ({total}) in {folder}: {fetched} downloaded, {len(entries) - fetched} already there")
+    try:
+        for name in names:
+            entries = data_files(name, mirror=base)
+            folder = root / name
+            fetched = 0
+            for entry in entries:
+                target = folder / entry.path
+                if target.is_dir():
+                    raise IsADirectoryError(f"cannot write '{target}': it is a folder; remove it and fetch again")
+                if _is_intact(target, entry):
+                    continue
+                if pooch is None:
+                    pooch = _import_pooch()
+                make(target.parent)
+                if target.exists():
+                    target.unlink()  # another hash: a corrupt or outdated copy, replaced below
+                say(f"  downloading {name}/{entry.path} ({_human_size(entry.size)}) from {entry.url}")
+                _download(pooch, entry, target)
+                fetched += 1
+            make(folder)
+            _write_text(folder / "SHA256SUMS", _sums_text(entries))
+            _write_text(folder / "SOURCE.md", _source_text(name, base))
+            total = _human_size(sum(e.size for e in entries))
+            say(f"{name}: {len(entries)} files ({total}) in {folder}: {fetched} downloaded, {len(entries) - fetched} already there")
+    except BaseException:
+        for f in reversed(made):  # innermost first; a folder holding a checked file stays
+            try:
+                f.rmdir()
+            except OSError:
+                pass
+        raise
     return root.resolve()

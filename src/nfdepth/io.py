@@ -401,8 +401,8 @@ def _kept_on_failure():
         COMPLETED_WRITES = saved
 
 
-def make_output_folder(path) -> Path:
-    """The output folder ``path``, created if missing (its parent must exist).
+def make_output_folder(path, *, parents: bool = False) -> Path:
+    """The output folder ``path``, created if missing (its parent must exist, unless ``parents``: then made too).
 
     During a command-line run a folder it creates is recorded in
     :data:`COMPLETED_WRITES` with the files, so that a failed or
@@ -410,6 +410,8 @@ def make_output_folder(path) -> Path:
     """
     path = Path(path)
     if not path.is_dir():
+        if parents and path.parent != path and not path.parent.is_dir():
+            make_output_folder(path.parent, parents=True)
         path.mkdir()
         if COMPLETED_WRITES is not None:
             COMPLETED_WRITES.append((path, False))
