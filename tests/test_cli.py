@@ -186,7 +186,7 @@ def test_bench_passes_its_options_through(tmp_path, capsys, monkeypatch):
 @pytest.mark.parametrize(
     ("argv", "code", "line"),
     [
-        (["--json", "{tmp}/r.txt"], 2, "--json '{tmp}/r.txt' must end in .json"),
+        (["--json", "{tmp}/r.txt"], 2, "--json '{tmp}/r.txt' must end in one of .json"),
         (["--json", "{tmp}/adir.json"], 4, "--json '{tmp}/adir.json' is a directory; expected a file path"),
         (["--json", "{tmp}/nodir/r.json"], 4, "--json '{tmp}/nodir/r.json': directory '{tmp}/nodir' does not exist"),
         (["--maps", "{tmp}/afile"], 4, "--maps '{tmp}/afile' exists and is not a directory"),

@@ -54,20 +54,6 @@ def register(sub, CLIError) -> None:
     p.set_defaults(func=run)
 
 
-def _check_json_path(path: str, CLIError) -> Path:
-    out = Path(path)
-    if out.suffix.lower() != ".json":
-        raise CLIError(f"--json '{out}' must end in .json", EXIT_USAGE)
-    if out.is_dir():
-        raise CLIError(f"--json '{out}' is a directory; expected a file path", EXIT_WRITE)
-    parent = out.parent if str(out.parent) else Path(".")
-    if parent.exists() and not parent.is_dir():
-        raise CLIError(f"--json '{out}': '{parent}' is not a directory", EXIT_WRITE)
-    if not parent.is_dir():
-        raise CLIError(f"--json '{out}': directory '{parent}' does not exist", EXIT_WRITE)
-    return out
-
-
 def _check_downsample(factor: int, scene, CLIError, methods=("nfdepth",)) -> None:
     """Refuse a ``--downsample`` factor that leaves views too small for one of ``methods`` (names the largest usable factor)."""
     h, w = scene.shape
@@ -128,11 +114,11 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
     if args.downsample < 1:
         raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
-    from .cli import _as_option, _positive
+    from .cli import _as_option, _check_output, _positive
 
     cost_step = _positive("--cost-step-px", args.cost_step_px)
     stereo_options = {} if cost_step is None else {"cost_step_px": cost_step}
-    js = _check_json_path(args.json, CLIError) if args.json else None
+    js = _check_output(args.json, force=True, exts=(".json",), what="--json") if args.json else None
     maps = Path(args.maps) if args.maps else None
     if maps is not None and maps.exists() and not maps.is_dir():
         raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)

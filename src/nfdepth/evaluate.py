@@ -548,7 +548,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         edge points where the peer has a value (the same points as the peer's
         ``"edges"`` figures).
     """
-    from . import datasets
+    from . import __version__, datasets
     from .stereo import static_stereo
 
     methods = _check_methods(methods)
@@ -571,8 +571,6 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     steps = depth_step_mask(truth)
     known = np.isfinite(truth)
     max_disp = float(np.nanmax(truth)) if known.any() else None
-    from . import __version__
-
     out = {
         "nfdepth_version": __version__,
         "scene": scene.name,
@@ -638,6 +636,12 @@ def _known_scene(name: str):
     return aliases.get(key)
 
 
+def _few(items, most: int = 3) -> str:
+    """``a, b, c and 6 more``."""
+    items = list(items)
+    return ", ".join(items[:most]) + (f" and {len(items) - most} more" if len(items) > most else "")
+
+
 def _complete(root: Path, names: list) -> tuple:
     """``(root, names)`` once every file of every named scene is there: a missing one is found before the first scene runs."""
     from .datasets import DataNotFoundError, missing_scene_files
@@ -645,7 +649,7 @@ def _complete(root: Path, names: list) -> tuple:
     for name in names:
         missing = missing_scene_files(name, root)
         if missing:
-            listed = ", ".join(f"'{p}'" for p in missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3 else "")
+            listed = _few(f"'{p}'" for p in missing)
             msg = f"scene {name!r}: data file{'s' if len(missing) > 1 else ''} missing: {listed} (check the data folder, or download it with `nfdepth fetch-data`)"
             raise DataNotFoundError(msg)
     return root, names
@@ -659,8 +663,7 @@ def _warn_incomplete(root: Path, present: list) -> list:
         if name not in present and (Path(root) / sub).is_dir():
             missing = missing_scene_files(name, root)
             warnings.warn(
-                f"scene {name!r} skipped: its folder '{Path(root) / sub}' lacks {', '.join(p.name for p in missing[:3])}"
-                + (f" and {len(missing) - 3} more file(s)" if len(missing) > 3 else ""),
+                f"scene {name!r} skipped: its folder '{Path(root) / sub}' lacks {_few(p.name for p in missing)}",
                 UserWarning,
                 stacklevel=3,
             )
