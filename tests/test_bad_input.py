@@ -1113,3 +1113,13 @@ def test_view_of_a_map_with_no_value_says_so(tmp_path, capfd):
         assert got == 0 and stdout == f"wrote {out}\n"
         assert err == f"nfdepth: warning: '{tmp_path / 'nan.npy'}' holds no finite value (all unknown): the PNG is all black\n"
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_edge_points_and_static_stereo_name_their_own_parameters():
+    g = nf.normal_flow([np.ones((8, 8))] * 3)
+    from nfdepth.edges import select_edge_points
+
+    with pytest.raises(ValueError, match=r"^smoothed_middle must be a real 2-D image"):
+        select_edge_points(g, np.ones((8, 8), complex))
+    with pytest.raises(TypeError, match=r"^edges_only must be True or False, got 1$"):
+        stereo.static_stereo(VIEWS3, reference=1, edges_only=1)

@@ -207,3 +207,37 @@ def test_motion_arithmetic_refuses_what_is_not_a_motion():
         m.scaled("x")
     with pytest.raises(ValueError, match=r"^factor must be a finite number, got nan$"):
         m.scaled(float("nan"))
+
+
+def test_camera_functions_refuse_complex_text_and_wrong_motions():
+    """Complex points lost their imaginary part (z = 0: inf) with only a ComplexWarning; a tuple for a motion or
+    a zero reduction factor raised AttributeError / ZeroDivisionError from inside."""
+    import nfdepth
+    from nfdepth.camera import (
+        image_flow,
+        normal_flow_px,
+        relative_normal_flow_coefficients,
+    )
+    from nfdepth.depth import Reason, solve_inverse_depth
+
+    cam = PinholeCamera(focal_px=100.0, width_px=65, height_px=49)
+    with pytest.raises(TypeError, match=r"^points must be real numbers, got dtype complex128$"):
+        cam.project(np.array([[1, 2, 3j]]))
+    with pytest.raises(TypeError, match=r"^alpha must be real numbers, got dtype <U1$"):
+        normal_flow_px(cam, [1.0], [1.0], [1.0], "a", RigidMotion((1, 0, 0)))
+    with pytest.raises(TypeError, match=r"^motion must be a nfdepth.RigidMotion .*got tuple$"):
+        image_flow(0.0, 0.0, 1.0, (1, 0, 0))
+    with pytest.raises(TypeError, match=r"^relative_motion must be a nfdepth.RigidMotion .*got NoneType$"):
+        relative_normal_flow_coefficients(cam, [1.0], [1.0], [0.0], None)
+    with pytest.raises(ValueError, match=r"^factor must be"):
+        cam.reduced(0, (10, 10))
+    with pytest.raises(TypeError, match=r"^delta_vn must be real numbers, got dtype complex128$"):
+        solve_inverse_depth([1j], camera=cam, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RigidMotion((1, 0, 0)))
+    # a point with no position has no data (it read UNDETERMINABLE)
+    res = solve_inverse_depth([1.0], camera=cam, rows=[np.nan], cols=[1.0], alpha=[0.0], relative_motion=RigidMotion((1, 0, 0)))
+    assert res.reason.tolist() == [Reason.NO_DATA]
+    assert nfdepth.stereo.auto_levels((480, 640)) == 5
+    with pytest.raises(TypeError, match=r"^shape must be \(rows, cols\), got 480$"):
+        nfdepth.stereo.auto_levels(480)
+    with pytest.raises(ValueError, match=r"^shape must be positive"):
+        nfdepth.stereo.auto_levels((-4, 5))

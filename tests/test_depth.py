@@ -223,3 +223,40 @@ def test_motions_beyond_the_stencils_range_warn():
         dynamic_stereo(row(1.0, 5).frames, camera=slow.camera, relative_motion=motion)
         with pytest.warns(UserWarning, match=r"^the edge points move a median of \d\.\d px across the moving camera's frames \(I1, I3, I5\)"):
             dynamic_stereo(row(6.0, 5).frames, camera=slow.camera, relative_motion=motion)  # 1.5 px per frame
+
+
+@pytest.mark.parametrize("sigma_px", [2.0, 3.0])
+def test_edge_points_near_the_border_are_not_selected(sigma_px):
+    """The smoothing reflects the frames at the border, and the mirror image moves the other way: a moving step
+    edge 1-1.5 sigma from the border read depths 8-53 % low (a few tens of its std). The pipelines keep no edge
+    point within 2.5 sigma of the border; inside, the same edge is exact to 0.5 %."""
+    from nfdepth.pipelines import BORDER_SIGMAS, static_stereo_edges
+
+    h, w, d = 32, 64, 0.5  # a vertical step moving 0.5 px per view: depth 100 / 0.5 = 200
+    cols = np.arange(w, dtype=float)[None, :].repeat(h, axis=0)
+    cam = PinholeCamera(focal_px=100.0, width_px=w, height_px=h)
+    for at_sigmas, selected in ((1.0, False), (1.5, False), (4.0, True), (6.0, True)):
+        c0 = -0.5 + at_sigmas * sigma_px
+        views = [100 + 50 * np.tanh((cols - c0 + (k - 1) * d) / 1.5) for k in range(3)]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # no edge points: the warning says so
+            res = static_stereo_edges(views, camera=cam, baseline=1.0, sigma_px=sigma_px)
+        near = res.cols < BORDER_SIGMAS * sigma_px
+        assert not near.any()
+        assert res.valid.any() == selected, at_sigmas
+        if selected:
+            assert np.nanmedian(res.depth[res.valid]) == pytest.approx(200.0, rel=0.005)
+
+
+def test_fuse_inverse_depth_takes_exact_measurements_and_refuses_a_negative_std():
+    """std 0 (exact data) gave NaN and count 0; a negative std was taken as missing. Exact measurements now outweigh
+    the rest (equal weights among them, std 0); a negative std is an error."""
+    rho, rho_std, count = fuse_inverse_depth([[-2.0, 1.0], [-2.0, 2.0]], 0.0, -200.0, [[0.0, 0.0], [0.0, 0.2]])
+    np.testing.assert_allclose(rho, [0.01, -0.005])
+    np.testing.assert_array_equal(rho_std, [0.0, 0.0])
+    np.testing.assert_array_equal(count, [2, 1])  # the second point: its exact measurement alone
+    with pytest.raises(ValueError, match=r"^delta_vn_std must be >= 0 \(NaN: unknown\), got 1 negative value\(s\), the lowest -0.1$"):
+        fuse_inverse_depth([[-2.0], [-2.0]], 0.0, -200.0, [[0.1], [-0.1]])
+    cam = PinholeCamera(focal_px=100.0, width_px=64, height_px=48)
+    with pytest.raises(ValueError, match=r"^delta_vn_std must be >= 0"):
+        solve_inverse_depth([-0.5], camera=cam, rows=[23.5], cols=[31.5], alpha=[0.0], relative_motion=RigidMotion((-2, 0, 0)), delta_vn_std=[-0.05])

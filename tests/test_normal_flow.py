@@ -197,3 +197,31 @@ def test_noise_gains_without_smoothing(stencil, n_frames):
     assert np.std(g.grad_row[inner]) == pytest.approx(spatial, rel=0.03)
     with pytest.raises(ValueError, match=r"^stencil must be one of \('matched', 'simpson', 'paper'\), got 'sobel'$"):
         noise_gains(sigma_px=0, stencil="sobel")
+
+
+@pytest.mark.parametrize(
+    ("bad", "error", "message"),
+    [
+        (np.ones(5), ValueError, r"must be a non-empty 2-D image \(rows, cols\), got shape \(5,\)"),
+        (np.ones((4, 5, 3)), ValueError, r".*got shape \(4, 5, 3\)$"),
+        (np.ones((0, 5)), ValueError, r".*got shape \(0, 5\)$"),
+        (np.ones((4, 5), complex), TypeError, r"must be a real numeric 2-D array, got dtype complex128"),
+        (np.array([["a", "b"], ["c", "d"]]), TypeError, r".*got dtype <U1$"),
+    ],
+)
+def test_smoothing_and_gradients_refuse_what_is_no_image(bad, error, message):
+    """gaussian_smooth and gradients (public) passed these to OpenCV or NumPy: a 1-D image came back as (1, 5),
+    a complex one as complex gradients, others as a raw cv2.error."""
+    with pytest.raises(error, match=r"^image " + message):
+        gaussian_smooth(bad, sigma_px=1.0)
+    with pytest.raises(error, match=r"^smoothed_frames\[0\] " + message):
+        gradients([bad, bad, bad])
+
+
+def test_smoothing_and_gradients_take_integer_and_list_images():
+    ramp = np.add.outer(np.arange(8), 2 * np.arange(9))
+    for image in (ramp.astype(np.int64), ramp.tolist(), ramp.astype(np.uint8)):
+        np.testing.assert_allclose(gaussian_smooth(image, sigma_px=1.0), gaussian_smooth(ramp.astype(float), sigma_px=1.0), atol=1e-12)
+        g = gradients([image, image, image], stencil="simpson")
+        np.testing.assert_allclose(g.grad_col[2:-2, 2:-2], 2.0)
+        np.testing.assert_allclose(g.grad_row[2:-2, 2:-2], 1.0)

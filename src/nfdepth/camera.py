@@ -1,6 +1,6 @@
 """Pinhole camera and rigid-motion model (paper eq. 1, 3, 4).
 
-Conventions (see ``docs/conventions.md``): image arrays are ``I[row, col]``;
+Conventions (see ``docs/how-it-works.md``, "Conventions"): image arrays are ``I[row, col]``;
 ``col`` grows to the right, ``row`` downward; camera frame X right, Y down,
 Z forward. A point ``(X, Y, Z)`` projects to normalised ``x = X/Z``,
 ``y = Y/Z`` and to pixel ``col = cx + f x``, ``row = cy + f y``.
@@ -21,6 +21,7 @@ from ._validate import (
     as_vector3,
     check_finite,
     check_image_size,
+    check_positive_finite,
     check_within,
 )
 
@@ -63,6 +64,22 @@ def _principal_point_expected(centre: float, reach: float) -> str:
 #: between two images cannot be told from a smaller one the other way; the
 #: small-motion method needs a few degrees per frame at most.
 MAX_ROTATION_PER_FRAME_DEG = 90.0
+
+
+def _real(name: str, values) -> np.ndarray:
+    """``values`` as a float array; complex, text or objects refused (NumPy would drop an imaginary part with a warning)."""
+    arr = np.asarray(values)
+    if arr.dtype == object or np.iscomplexobj(arr) or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        msg = f"{name} must be real numbers, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    return arr.astype(float, copy=False)
+
+
+def _motion(name: str, motion) -> RigidMotion:
+    if not isinstance(motion, RigidMotion):
+        msg = f"{name} must be a nfdepth.RigidMotion (e.g. RigidMotion.camera_translation((1, 0, 0))), got {type(motion).__name__}"
+        raise TypeError(msg)
+    return motion
 
 
 def _magnitude(vec) -> float:
@@ -143,24 +160,29 @@ class PinholeCamera:
 
         Pixel centres map as ``c' = (c + 0.5) / factor - 0.5``.
         """
+        factor = check_positive_finite("factor", factor)
         h, w = shape
         return PinholeCamera(self.focal_px / factor, w, h, (self.cx_px + 0.5) / factor - 0.5, (self.cy_px + 0.5) / factor - 0.5)
 
     def to_normalized(self, rows, cols):
         """Pixel ``(row, col)`` to normalised image coordinates ``(x, y)``."""
-        x = (np.asarray(cols, dtype=float) - self.cx_px) / self.focal_px
-        y = (np.asarray(rows, dtype=float) - self.cy_px) / self.focal_px
+        x = (_real("cols", cols) - self.cx_px) / self.focal_px
+        y = (_real("rows", rows) - self.cy_px) / self.focal_px
         return x, y
 
     def to_pixel(self, x, y):
         """Normalised ``(x, y)`` to pixel ``(row, col)``."""
-        rows = self.cy_px + self.focal_px * np.asarray(y, dtype=float)
-        cols = self.cx_px + self.focal_px * np.asarray(x, dtype=float)
+        rows = self.cy_px + self.focal_px * _real("y", y)
+        cols = self.cx_px + self.focal_px * _real("x", x)
         return rows, cols
 
     def project(self, points):
-        """Project camera-frame points, shape ``(..., 3)``, to ``(row, col, Z)``."""
-        points = np.asarray(points, dtype=float)
+        """Project camera-frame points, shape ``(..., 3)``, to ``(row, col, Z)``.
+
+        Points at ``Z <= 0`` (at or behind the camera) are projected all the
+        same (through the centre, or to inf at 0): test ``Z > 0`` where it matters.
+        """
+        points = _real("points", points)
         if points.shape[-1] != 3:
             msg = f"points must have shape (..., 3), got {points.shape}"
             raise ValueError(msg)
@@ -171,7 +193,7 @@ class PinholeCamera:
     def back_project(self, rows, cols, depth):
         """Pixel positions and depth Z to camera-frame points, shape ``(..., 3)``."""
         x, y = self.to_normalized(rows, cols)
-        depth = np.asarray(depth, dtype=float)
+        depth = _real("depth", depth)
         return np.stack(np.broadcast_arrays(x * depth, y * depth, depth), axis=-1)
 
 
@@ -260,9 +282,8 @@ def image_flow(x, y, inverse_depth, motion: RigidMotion):
 
     ``inverse_depth`` is ``1/Z`` (0 for points at infinity).
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    rho = np.asarray(inverse_depth, dtype=float)
+    motion = _motion("motion", motion)
+    x, y, rho = _real("x", x), _real("y", y), _real("inverse_depth", inverse_depth)
     vx, vy, vz = motion.translation
     ur, vr = _rotational_flow(x, y, motion.rotation)
     return ur + (vx - x * vz) * rho, vr + (vy - y * vz) * rho
@@ -275,7 +296,7 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
     """
     x, y = camera.to_normalized(rows, cols)
     with np.errstate(divide="ignore"):
-        rho = 1.0 / np.asarray(depth, dtype=float)
+        rho = 1.0 / _real("depth", depth)
     u, v = image_flow(x, y, rho, motion)
     return camera.focal_px * u, camera.focal_px * v
 
@@ -292,6 +313,7 @@ def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: Rigi
     -0.5
     """
     fu, fv = image_flow_px(camera, rows, cols, depth, motion)
+    alpha = _real("alpha", alpha)
     return fu * np.cos(alpha) + fv * np.sin(alpha)
 
 
@@ -302,7 +324,9 @@ def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, 
     ``B = f * (dVx - x dVz, dVy - y dVz) . n`` with ``n = (cos alpha, sin alpha)``.
     Inverse depth follows as ``rho = (dVn - A) / B`` where ``B != 0``.
     """
+    relative_motion = _motion("relative_motion", relative_motion)
     x, y = camera.to_normalized(rows, cols)
+    alpha = _real("alpha", alpha)
     c, s = np.cos(alpha), np.sin(alpha)
     ur, vr = _rotational_flow(x, y, relative_motion.rotation)
     vx, vy, vz = relative_motion.translation

@@ -31,7 +31,7 @@ from ._validate import (
     check_nonzero_finite,
     check_positive_finite,
 )
-from .camera import PinholeCamera, RigidMotion, relative_normal_flow_coefficients
+from .camera import PinholeCamera, RigidMotion, _real, relative_normal_flow_coefficients
 
 __all__ = [
     "Reason",
@@ -144,15 +144,16 @@ def solve_inverse_depth(
         msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
         raise TypeError(msg)
     min_cos = check_fraction("min_cos", min_cos)
-    dvn = np.asarray(delta_vn, dtype=float)
-    alpha = np.asarray(alpha, dtype=float)
+    dvn = _real("delta_vn", delta_vn)
+    alpha = _real("alpha", alpha)
     a, b = relative_normal_flow_coefficients(camera, rows, cols, alpha, relative_motion)
     x, y = camera.to_normalized(rows, cols)
     vx, vy, vz = relative_motion.translation
     flow_norm = camera.focal_px * np.hypot(vx - x * vz, vy - y * vz)
     dvn, a, b, flow_norm = np.broadcast_arrays(dvn, a, b, flow_norm)
     reason = np.full(dvn.shape, Reason.OK, dtype=np.uint8)
-    reason[~np.isfinite(dvn) | ~np.isfinite(alpha * np.ones(dvn.shape))] = Reason.NO_DATA
+    # no measurement, or no position or direction for it (NaN rows, cols or alpha)
+    reason[~np.isfinite(dvn) | ~np.isfinite(alpha * np.ones(dvn.shape)) | ~np.isfinite(a) | ~np.isfinite(b)] = Reason.NO_DATA
     with np.errstate(divide="ignore", invalid="ignore"):
         cos = np.abs(b) / flow_norm
         determinable = (flow_norm > 0) & (cos >= max(min_cos, 1e-12))
@@ -165,7 +166,7 @@ def solve_inverse_depth(
         rho_std = np.full(dvn.shape, np.nan)
     else:
         with np.errstate(divide="ignore", invalid="ignore"):
-            rho_std = np.where(ok, np.asarray(delta_vn_std, dtype=float) / np.abs(b), np.nan)
+            rho_std = np.where(ok, _check_std("delta_vn_std", delta_vn_std) / np.abs(b), np.nan)
     if max_rel_std is not None:
         bound = check_nonnegative_finite("max_rel_std", max_rel_std)
         if delta_vn_std is None:
@@ -180,7 +181,7 @@ def solve_inverse_depth(
 
 
 def _special_case(numerator, delta_vn):
-    dvn = np.asarray(delta_vn, dtype=float)
+    dvn = _real("delta_vn", delta_vn)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.asarray(numerator, dtype=float) / dvn
     return np.where((z > 0) & np.isfinite(z), z, np.nan)  # dVn = 0 (at infinity) is no depth either
@@ -219,6 +220,17 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
     return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
 
 
+def _check_std(name: str, std) -> np.ndarray:
+    """A standard deviation: >= 0 (NaN: unknown), else ValueError."""
+    std = _real(name, std)
+    with np.errstate(invalid="ignore"):
+        negative = std < 0
+    if np.any(negative):
+        msg = f"{name} must be >= 0 (NaN: unknown), got {int(np.count_nonzero(negative))} negative value(s), the lowest {float(np.min(std[negative])):g}"
+        raise ValueError(msg)
+    return std
+
+
 def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
     """Weighted least-squares inverse depth from several measurements of a point.
 
@@ -230,17 +242,24 @@ def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
         \\qquad \\sigma_\\rho = \\Big(\\sum_k w_k B_k^2\\Big)^{-1/2},
         \\qquad w_k = \\sigma_k^{-2}.
 
-    NaN measurements are ignored. Returns ``(rho, rho_std, count)`` reduced
-    along ``axis``; NaN where no measurement has ``B != 0``.
+    NaN measurements are ignored. Measurements of std 0 (exact) outweigh
+    every other: where a point has any, they alone give its estimate (equal
+    weights) and its std is 0. A negative std is refused (ValueError).
+    Returns ``(rho, rho_std, count)`` reduced along ``axis``; NaN where no
+    measurement has ``B != 0``.
     """
-    dvn, a, b, std = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (delta_vn, a, b, delta_vn_std)))
-    usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (std > 0) & (b != 0)
+    dvn, a, b, std = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (delta_vn, a, b, _check_std("delta_vn_std", delta_vn_std))))
+    usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (b != 0)
+    exact = usable & (std == 0)
+    has_exact = np.any(exact, axis=axis, keepdims=True)
+    usable = np.where(has_exact, exact, usable)  # the exact measurements alone where a point has any
     with np.errstate(divide="ignore", invalid="ignore"):
-        w = np.where(usable, 1.0 / std**2, 0.0)
+        w = np.where(usable, np.where(has_exact, 1.0, 1.0 / std**2), 0.0)
         num = np.sum(np.where(usable, w * b * (dvn - a), 0.0), axis=axis)
         den = np.sum(np.where(usable, w * b * b, 0.0), axis=axis)
         rho = num / den
         rho_std = 1.0 / np.sqrt(den)
+    rho_std = np.where(np.squeeze(has_exact, axis=axis), 0.0, rho_std)
     count = np.sum(usable, axis=axis)
     bad = den <= 0
     rho = np.where(bad, np.nan, rho)

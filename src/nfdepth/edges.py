@@ -292,7 +292,10 @@ def select_edge_points(
         min_gradient = relative_gradient * high
     else:
         min_gradient = check_threshold("min_gradient", min_gradient)
-    zero = laplacian_zero_crossings(smoothed_middle)
+    try:
+        zero = laplacian_zero_crossings(smoothed_middle)
+    except ValueError as exc:  # told with this function's parameter name
+        raise ValueError(str(exc).replace("smoothed must", "smoothed_middle must", 1)) from None
     strong = (mag >= _comparable_threshold(min_gradient, mag.dtype)) & (mag > rounding_gradient_floor(smoothed_middle))
     ratio = corner_ratio(field.grad_col, field.grad_row, window_sigma_px=corner_window_px)
     corner = ~(ratio <= max_corner_ratio)

@@ -979,8 +979,9 @@ def normal_flow_edges(
     min_gradient, relative_gradient, max_corner_ratio, border_px
         Edge-point rules (:func:`nfdepth.edges.select_edge_points`).
     corner_window_px : float, optional
-        Structure-tensor window; default ``max(sigma_px, 1)`` as in the
-        pipelines.
+        Structure-tensor window; default ``max(sigma_px, 1)``, as
+        ``static_stereo`` takes its edge points (the paper's pipelines,
+        ``dynamic_stereo`` and ``static_stereo_edges``, use ``2 sigma_px``).
     threads : int, optional
         Threads of the numba path: the blurs, the cell-grid pass and the
         edge-point tests run in row strips of at least 2**17 pixels (smaller

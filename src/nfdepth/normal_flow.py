@@ -129,12 +129,31 @@ class GradientField:
         return np.broadcast_to(rows, shape), np.broadcast_to(cols, shape)
 
 
+_FLOAT_TYPES = (np.float32, np.float64)
+
+
+def _real_image(name: str, image) -> np.ndarray:
+    """A 2-D, non-empty, real numeric array (no pass over its values: NaN stays NaN); integer or boolean
+    images become float64 (smoothing them in their own type would round the result)."""
+    arr = np.asarray(image)
+    if arr.dtype == object or np.iscomplexobj(arr) or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        msg = f"{name} must be a real numeric 2-D array, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    if arr.ndim != 2 or arr.size == 0:
+        msg = f"{name} must be a non-empty 2-D image (rows, cols), got shape {arr.shape}"
+        raise ValueError(msg)
+    return arr if arr.dtype.type in _FLOAT_TYPES else arr.astype(np.float64)
+
+
 def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
     """Gaussian smoothing (OpenCV, reflected border); ``sigma_px = 0`` copies.
 
-    The kernel is truncated at 4 sigma on each side.
+    The kernel is truncated at 4 sigma on each side. ``image``: a 2-D real
+    array; float32 and float64 keep their type, integer or boolean images
+    are smoothed as float64.
     """
     sigma_px = check_scale_px("sigma_px", sigma_px)
+    image = _real_image("image", image)
     if sigma_px == 0:
         return np.array(image, copy=True)
     radius = max(1, int(np.ceil(4.0 * sigma_px)))
@@ -204,6 +223,7 @@ def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "m
         raise TypeError(msg)
     n = len(smoothed_frames)
     if n in (2, 3):
+        smoothed_frames = [_real_image(f"smoothed_frames[{k}]", f) for k, f in enumerate(smoothed_frames)]
         shapes = [np.shape(f) for f in smoothed_frames]
         if any(len(sh) != 2 or min(sh) < 2 for sh in shapes) or len(set(shapes)) > 1:
             msg = f"smoothed_frames must be 2-D arrays of one shape, at least 2x2, got shapes {shapes}"

@@ -637,8 +637,16 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
 
 
 def auto_levels(shape, *, min_size_px: int = 24) -> int:
-    """Pyramid levels: halve until the smaller side would drop below ``min_size_px``."""
-    side = min(shape)
+    """Pyramid levels for an image of ``shape`` ``(rows, cols)``: halve until the smaller side would drop below ``min_size_px``."""
+    try:
+        rows, cols = (int(v) for v in shape)
+    except (TypeError, ValueError):
+        msg = f"shape must be (rows, cols), got {shape!r}"
+        raise TypeError(msg) from None
+    if rows < 1 or cols < 1:
+        msg = f"shape must be positive (rows, cols), got {shape!r}"
+        raise ValueError(msg)
+    side = min(rows, cols)
     levels = 1
     while side // 2 >= min_size_px:
         side //= 2
@@ -1902,6 +1910,7 @@ def static_stereo(
         raise ValueError(msg)
     view_schedule = check_bool("view_schedule", view_schedule)
     match_exposure = check_bool("match_exposure", match_exposure)
+    edges_only = check_bool("edges_only", edges_only)
     cost_volume = check_bool("cost_volume", cost_volume)
     if aggregation not in ("guided", "gaussian"):
         msg = f"aggregation must be 'guided' or 'gaussian', got {aggregation!r}"
