@@ -191,3 +191,30 @@ def test_zero_crossings_and_structure_tensor_refuse_bad_arrays():
     for a, b in (((3, 4), (4, 3)), ((0, 4), (0, 4)), ((3,), (3,))):
         with pytest.raises(ValueError, match=rf"^grad_col and grad_row must be non-empty 2-D arrays of one shape, got {re.escape(str(a))} and {re.escape(str(b))}$"):
             block_structure_tensor(np.zeros(a), np.zeros(b), window_sigma_px=2.0)
+
+
+@pytest.mark.parametrize("use_numba", [True, False])
+def test_a_linear_ramp_has_no_edge_points_inside(monkeypatch, use_numba):
+    """A noise-free linear ramp's Laplacian is float32 rounding; its random signs gave zero crossings (916 'edge
+    points' on a 48 x 48 ramp, moving or not). A crossing now needs one corner beyond ROUNDING_LAPLACIAN times the
+    largest intensity. Only the reflected border, a real kink of the smoothed image, keeps crossings."""
+    from nfdepth import fast
+
+    if use_numba and not fast.USE_NUMBA:
+        pytest.skip("numba not installed")
+    monkeypatch.setattr(fast, "USE_NUMBA", use_numba)
+    fast._local.ws = None
+    r, c = np.mgrid[0:48, 0:48].astype(np.float32)
+    ramp = [2 * (c - 0.3 * t) + 3 * (r - 0.1 * t) + 100 for t in (-1, 0, 1)]
+    sigma = 2.0
+    inside = np.zeros((47, 47), bool)
+    inside[9:-9, 9:-9] = True  # beyond the smoothing's reach (4 sigma) of the reflected border
+    smoothed = gaussian_smooth(ramp[1], sigma_px=sigma)
+    assert not laplacian_zero_crossings(smoothed)[inside].any()
+    reference = select_edge_points(normal_flow(ramp, sigma_px=sigma), smoothed, corner_window_px=sigma).mask
+    got = fast.normal_flow_edges(ramp, sigma_px=sigma).mask
+    assert not reference[inside].any() and not got[inside].any()
+    np.testing.assert_array_equal(got, reference)
+    # a real edge of the faintest contrast the strong test keeps is still found
+    step = [100 + 0.5 * np.tanh((c - 24.3 + 0.3 * t) / 1.5) for t in (-1, 0, 1)]
+    assert fast.normal_flow_edges(step, sigma_px=sigma).mask[:, 23:26].any()

@@ -105,7 +105,7 @@ import numpy as np
 
 from ._quantile import percentile
 from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_scale_px, check_threshold
-from .edges import ROUNDING_GRADIENT, _block_read_back, _comparable_threshold, _corner_window_blocks
+from .edges import ROUNDING_GRADIENT, ROUNDING_LAPLACIAN, _block_read_back, _comparable_threshold, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
 
 try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
@@ -370,7 +370,7 @@ def _blur(src, dst, k: _Kernels):
 if _njit is not None:
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
-    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi):
+    def _nb_dense(G0, G1, G2, w0, w1, w2, kc1, kc2, matched, tdiv, b, lap_tol, gc, gr, mag, vn, alpha, mask, cand, rows, T, r_lo, r_hi):
         """One pass over cell rows ``r_lo .. r_hi - 1``: stencils, I_t, |grad I|, vn, zero crossings, block tensor.
 
         Writes ``gc, gr, mag, vn`` (cells), fills ``alpha`` with NaN and ``mask``
@@ -389,6 +389,7 @@ if _njit is not None:
         half = np.float32(0.5)
         quarter = np.float32(0.25)
         m4 = np.float32(-4.0)
+        tol = np.float32(lap_tol)
         nan = np.float32(np.nan)
         S = np.empty((4, W + 2), np.float32)  # weighted sums, rows y-1..y+2 (ring), edge-padded by 1
         DC = np.empty((2, W), np.float32)  # column differences of rows r, r+1 (ring)
@@ -404,7 +405,7 @@ if _njit is not None:
             _comb_row(G0, G1, G2, w0, w1, w2, min(max(y, 0), H - 1), S[(y + 4) % 4])
         _dcol_row(S[r_lo % 4], kc1, kc2, matched, DC[r_lo % 2], w)
         _diff_row(G2, G0, r_lo, Dt[r_lo % 2])
-        _lap_row(G1, r_lo, m4, PS[r_lo % 2], NG[r_lo % 2])
+        _lap_row(G1, r_lo, m4, tol, PS[r_lo % 2], NG[r_lo % 2])
         for r in range(r_lo, r_hi):
             y2 = r + 2
             _comb_row(G0, G1, G2, w0, w1, w2, min(y2, H - 1), S[y2 % 4])
@@ -422,7 +423,7 @@ if _njit is not None:
             p1 = PS[(r + 1) % 2]
             n0 = NG[r % 2]
             n1 = NG[(r + 1) % 2]
-            _lap_row(G1, r + 1, m4, p1, n1)
+            _lap_row(G1, r + 1, m4, tol, p1, n1)
             # row differences between pixel rows r and r + 1 (edge-padded rows)
             if matched:
                 for x in range(W):
@@ -480,7 +481,10 @@ if _njit is not None:
                     tr[j, 2] = quarter * ((tr[j, 2] + x0 * y0) + x0 * y0)
             if inside and b <= r < h - b:
                 for c in range(w):
-                    ZC[c] = (p0[c] | p0[c + 1] | p1[c] | p1[c + 1]) & (n0[c] | n0[c + 1] | n1[c] | n1[c + 1])
+                    op = p0[c] | p0[c + 1] | p1[c] | p1[c + 1]
+                    on = n0[c] | n0[c + 1] | n1[c] | n1[c + 1]
+                    # both signs, and one corner beyond rounding (laplacian_zero_crossings)
+                    ZC[c] = (op > 0) & (on > 0) & ((op | on) >= 2)
                 base = r * w
                 for c in range(b, w - b):
                     cand[ncand] = base + c
@@ -519,28 +523,33 @@ if _njit is not None:
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False, inline="always")
-    def _lap_row(G, y, m4, pos, neg):
-        """Signs of cv2.Laplacian(ksize=1, BORDER_REFLECT) of row y, same summation order (bit-identical)."""
+    def _lap_row(G, y, m4, tol, pos, neg):
+        """Signs of cv2.Laplacian(ksize=1, BORDER_REFLECT) of row y, same summation order (bit-identical).
+
+        ``pos`` is 1 where the Laplacian is above 0, 2 where above ``tol``
+        (beyond rounding); ``neg`` the same below 0 and ``-tol``.
+        """
         H, W = G.shape
         up = G[y - 1 if y > 0 else 0]
         dn = G[y + 1 if y < H - 1 else H - 1]
         row = G[y]
+        ntol = -tol
         if W == 1:
             v = ((up[0] + row[0]) + m4 * row[0] + row[0]) + dn[0]
-            pos[0] = v > 0
-            neg[0] = v < 0
+            pos[0] = (v > 0) + (v > tol)
+            neg[0] = (v < 0) + (v < ntol)
             return
         v = (((up[0] + row[0]) + m4 * row[0]) + row[1]) + dn[0]
-        pos[0] = v > 0
-        neg[0] = v < 0
+        pos[0] = (v > 0) + (v > tol)
+        neg[0] = (v < 0) + (v < ntol)
         for x in range(1, W - 1):
             v = (((up[x] + row[x - 1]) + m4 * row[x]) + row[x + 1]) + dn[x]
-            pos[x] = v > 0
-            neg[x] = v < 0
+            pos[x] = (v > 0) + (v > tol)
+            neg[x] = (v < 0) + (v < ntol)
         x = W - 1
         v = (((up[x] + row[x - 1]) + m4 * row[x]) + row[x]) + dn[x]
-        pos[x] = v > 0
-        neg[x] = v < 0
+        pos[x] = (v > 0) + (v > tol)
+        neg[x] = (v < 0) + (v < ntol)
 
 
     @_njit(cache=True, fastmath=False, error_model="numpy", nogil=True, boundscheck=False)
@@ -631,10 +640,12 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
     strips = _cell_strips(*mag.shape, threads)
     ends = [0] * len(strips)
     w0, w1, w2 = k.nb_weights
+    peak = _peak(G1)
+    lap_tol = ROUNDING_LAPLACIAN * peak
 
     def dense(i):
         r_lo, r_hi = strips[i]
-        ends[i] = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor, r_lo, r_hi)
+        ends[i] = _nb_dense(G0, G1, G2, w0, w1, w2, k.kc1, k.kc2, k.matched, k.tdiv, p.border_px, lap_tol, ws.gc, ws.gr, mag, vn, alpha, mask, ws.cand, ws.rows, ws.tensor, r_lo, r_hi)
 
     _run_strips(dense, len(strips), threads)
     ncand = sum(e - r_lo * w for e, (r_lo, _) in zip(ends, strips))
@@ -652,7 +663,7 @@ def _nb_run(ws: _NbWorkspace, k: _Kernels, G0, G1, G2, threads: int = 1) -> Norm
     if ncand:
         T = ws.tensor
         # float32 threshold: the reference compares float32 magnitudes with a Python float (NEP 50)
-        thr, floor = np.float32(_comparable_threshold(min_gradient, np.float32)), np.float32(_rounding_floor(G1))
+        thr, floor = np.float32(_comparable_threshold(min_gradient, np.float32)), np.float32(ROUNDING_GRADIENT * peak)
         flat_gc, flat_gr, flat_alpha = ws.gc.ravel(), ws.gr.ravel(), alpha.ravel()
 
         def select(i):
@@ -876,6 +887,13 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
             dst |= src[rs1, cs]
             dst |= src[rs1, cs1]
         inner &= tmp
+        # and one corner beyond rounding (laplacian_zero_crossings)
+        np.abs(lap, out=lap)
+        np.greater(lap, np.float32(ROUNDING_LAPLACIAN * _peak(G1)), out=pos)
+        np.logical_or(pos[rs, cs], pos[rs, cs1], out=tmp)
+        tmp |= pos[rs1, cs]
+        tmp |= pos[rs1, cs1]
+        inner &= tmp
         m = mag[rs, cs]
         np.greater_equal(m, _comparable_threshold(min_gradient, m.dtype), out=tmp)  # float32 compare, as the reference (NEP 50)
         inner &= tmp
@@ -935,9 +953,14 @@ def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
     mask.ravel()[idx[~ok]] = False
 
 
+def _peak(G1) -> float:
+    """The largest ``|value|`` of the smoothed middle frame (one SIMD pass, ~0.01 ms at 640 x 480), for the rounding floors."""
+    return float(cv2.norm(np.ascontiguousarray(G1), cv2.NORM_INF)) if G1.size else 0.0
+
+
 def _rounding_floor(G1) -> float:
-    """:func:`nfdepth.edges.rounding_gradient_floor` of the smoothed middle frame (one SIMD pass, ~0.01 ms at 640 x 480)."""
-    return ROUNDING_GRADIENT * float(cv2.norm(np.ascontiguousarray(G1), cv2.NORM_INF)) if G1.size else 0.0
+    """:func:`nfdepth.edges.rounding_gradient_floor` of the smoothed middle frame."""
+    return ROUNDING_GRADIENT * _peak(G1)
 
 
 def _check_frame_shape(frames):
