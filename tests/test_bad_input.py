@@ -750,7 +750,8 @@ def test_cli_image_too_large(tmp_path, views_on_disk, capfd, monkeypatch):
     code, out, err = run_cli(capfd, "stereo", *views_on_disk, "--out", tmp_path / "o.pfm")
     assert code == 2
     assert err.strip().splitlines() == [err.strip()]
-    assert "has 64x48 px (width x height) = 0.003 megapixels, above the limit of 0.001 megapixels per frame" in err
+    # the file, where the library can only say views[0]
+    assert err.startswith(f"nfdepth: error: view '{views_on_disk[0]}' has 64x48 px (width x height) = 0.003 megapixels, above the limit of 0.001 megapixels per frame")
     assert not (tmp_path / "o.pfm").exists()
 
 
@@ -1123,3 +1124,23 @@ def test_edge_points_and_static_stereo_name_their_own_parameters():
         select_edge_points(g, np.ones((8, 8), complex))
     with pytest.raises(TypeError, match=r"^edges_only must be True or False, got 1$"):
         stereo.static_stereo(VIEWS3, reference=1, edges_only=1)
+
+
+def test_writers_readers_and_options_refuse_what_they_would_misread(tmp_path):
+    """PFM bytes under a .png name, grey='no', a direction of bools or text, and fuse_axes of numbers were
+    taken (or failed deep inside)."""
+    from nfdepth.xy_stereo import fuse_axes
+
+    with pytest.raises(ValueError, match=r"^path must end in .pfm, got '.*x.png'"):
+        io.write_pfm(tmp_path / "x.png", np.ones((2, 2)))
+    assert not list(tmp_path.iterdir())
+    io.write_pfm(tmp_path / "x.PFM", np.ones((2, 2)))  # any case
+    cv2.imwrite(str(tmp_path / "c.png"), np.zeros((6, 7), np.uint8))
+    with pytest.raises(TypeError, match=r"^grey must be True or False, got 'no'$"):
+        io.read_image(tmp_path / "c.png", grey="no")
+    cam = nf.PinholeCamera(focal_px=10.0, width_px=8, height_px=8)
+    for bad in ((True, False, False), (1j, 0, 0), ("a", 0, 0)):
+        with pytest.raises(TypeError, match=r"^direction must be 3 numbers"):
+            nf.static_stereo_edges([np.ones((8, 8))] * 3, camera=cam, baseline=1.0, direction=bad)
+    with pytest.raises(TypeError, match=r"^row must be a StereoResult .*got int$"):
+        fuse_axes(1, 2)

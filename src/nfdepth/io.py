@@ -38,7 +38,7 @@ from typing import BinaryIO
 import cv2
 import numpy as np
 
-from ._validate import NFDepthError, check_positive_finite, float_dtype
+from ._validate import NFDepthError, check_bool, check_positive_finite, float_dtype
 
 __all__ = [
     "InputReadError",
@@ -315,6 +315,7 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
     -----
     JPEG EXIF orientation is ignored (pixels as stored).
     """
+    grey = check_bool("grey", grey)
     out_dtype = None if dtype is None else float_dtype(dtype)
     path = Path(path)
     ext = path.suffix.lower()
@@ -537,6 +538,9 @@ def write_pfm(path, array, *, force: bool = False) -> Path:
     -------
     pathlib.Path
     """
+    if Path(path).suffix.lower() != ".pfm":  # PFM bytes under another name mislead every reader
+        msg = f"path must end in .pfm, got {str(path)!r} (write_array picks the format from the extension)"
+        raise ValueError(msg)
     arr = _as_map("array", array, allow_colour=True)
     payload = _pfm_bytes(arr)
     return atomic_write(path, lambda fh: fh.write(payload), force=force)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ._exposure import _plateaus, clipped_apart, match_nearby_exposures
-from ._validate import UNIT_SCALE_RANGE, as_frames, check_bool, check_frame_interval, check_noise_std, check_scale_px, check_within, float_dtype
+from ._validate import UNIT_SCALE_RANGE, as_frames, as_vector3, check_bool, check_frame_interval, check_noise_std, check_scale_px, check_within, float_dtype
 from .camera import PinholeCamera, RigidMotion, _magnitude
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
 from .edges import EdgeSelection, _no_edge_points_message, select_edge_points
@@ -513,8 +513,8 @@ def static_stereo_edges(
     _check_min_size("views", views[0].shape)
     _check_camera(camera, views[0].shape)
     baseline = check_within("baseline", baseline, advice="give it in a unit that keeps it there (inverse depths are per unit of baseline)")
-    direction = np.asarray(direction, dtype=float)
-    if direction.shape != (3,) or not np.all(np.isfinite(direction)) or not np.any(direction):
+    direction = as_vector3("direction", direction)  # numbers: bools, text and complex refused
+    if not np.any(direction):
         msg = f"direction must be 3 finite numbers, not all zero, got {direction.tolist()}"
         raise ValueError(msg)
     direction = direction / _magnitude(direction)  # (safe for components of 1e-300 or 1e300: only the direction counts)

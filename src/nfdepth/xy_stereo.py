@@ -136,6 +136,10 @@ def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_
     with a value, and the pixels refused for disagreeing.
     """
     limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
+    for name, part in (("row", row), ("column", column)):
+        if not all(hasattr(part, a) for a in ("disparity", "uncertainty", "reason")):
+            msg = f"{name} must be a StereoResult (or have disparity, uncertainty and reason maps), got {type(part).__name__}"
+            raise TypeError(msg)
     if row.disparity.shape != column.disparity.shape:
         msg = f"the row's and the column's maps must have one shape, got {row.disparity.shape} and {column.disparity.shape}"
         raise ValueError(msg)
