@@ -374,6 +374,24 @@ def float_dtype(dtype) -> np.dtype:
 MAX_FLOAT32_INTENSITY = 1e15
 
 
+def is_real_numeric(arr: np.ndarray) -> bool:
+    """True for an array of real numbers or booleans; False for complex, text, objects."""
+    return arr.dtype != object and not np.iscomplexobj(arr) and (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool)
+
+
+def check_shape_rows_cols(shape) -> tuple[int, int]:
+    """``shape`` as two positive ints ``(rows, cols)``: TypeError if it is no pair of integers, ValueError below 1."""
+    try:
+        rows, cols = (int(s) for s in shape)
+    except (TypeError, ValueError):
+        msg = f"shape must be (rows, cols), got {shape!r}"
+        raise TypeError(msg) from None
+    if rows < 1 or cols < 1:
+        msg = f"shape must be positive, got {shape!r}"
+        raise ValueError(msg)
+    return rows, cols
+
+
 def as_image(name: str, image, dtype=np.float32) -> np.ndarray:
     """Validate one 2-D grey image: real, finite, at least 2x2 (float32: |values| at most 1e15); return as ``dtype``."""
     arr = np.asarray(image)

@@ -23,6 +23,7 @@ from ._validate import (
     check_image_size,
     check_positive_finite,
     check_within,
+    is_real_numeric,
 )
 
 __all__ = [
@@ -69,7 +70,7 @@ MAX_ROTATION_PER_FRAME_DEG = 90.0
 def _real(name: str, values) -> np.ndarray:
     """``values`` as a float array; complex, text or objects refused (NumPy would drop an imaginary part with a warning)."""
     arr = np.asarray(values)
-    if arr.dtype == object or np.iscomplexobj(arr) or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+    if not is_real_numeric(arr):
         msg = f"{name} must be real numbers, got dtype {arr.dtype}"
         raise TypeError(msg)
     return arr.astype(float, copy=False)

@@ -30,7 +30,13 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import check_fraction, check_int, check_scale_px, check_threshold
+from ._validate import (
+    check_fraction,
+    check_int,
+    check_scale_px,
+    check_threshold,
+    is_real_numeric,
+)
 from .normal_flow import GradientField
 
 #: Gradients below this fraction of the largest smoothed intensity are float32
@@ -77,7 +83,7 @@ def laplacian_zero_crossings(smoothed: np.ndarray) -> np.ndarray:
         ``ROUNDING_LAPLACIAN`` times the largest ``|smoothed|`` (rounding is no sign).
     """
     img = np.asarray(smoothed)
-    if img.ndim != 2 or min(img.shape) < 2 or not (np.issubdtype(img.dtype, np.number) or img.dtype == bool) or np.iscomplexobj(img):
+    if img.ndim != 2 or min(img.shape) < 2 or not is_real_numeric(img):
         msg = f"smoothed must be a real 2-D image of at least 2x2 pixels, got dtype {img.dtype}, shape {img.shape}"
         raise ValueError(msg)
     if img.dtype not in (np.float32, np.float64):

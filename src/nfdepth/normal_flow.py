@@ -48,7 +48,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_frame_interval, check_int, check_scale_px, float_dtype
+from ._validate import as_frames, as_image, check_frame_interval, check_int, check_scale_px, float_dtype, is_real_numeric
 
 __all__ = [
     "STENCILS",
@@ -136,7 +136,7 @@ def _real_image(name: str, image) -> np.ndarray:
     """A 2-D, non-empty, real numeric array (no pass over its values: NaN stays NaN); integer or boolean
     images become float64 (smoothing them in their own type would round the result)."""
     arr = np.asarray(image)
-    if arr.dtype == object or np.iscomplexobj(arr) or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+    if not is_real_numeric(arr):
         msg = f"{name} must be a real numeric 2-D array, got dtype {arr.dtype}"
         raise TypeError(msg)
     if arr.ndim != 2 or arr.size == 0:

@@ -17,7 +17,6 @@ the direction of travel.
 from __future__ import annotations
 
 import math
-
 import warnings
 from dataclasses import dataclass, field, replace
 

@@ -313,7 +313,7 @@ from ._exposure import match_exposures
 from ._quantile import median, percentile, percentiles
 from ._resample import remap_linear
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_depth_range, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_depth_range, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_shape_rows_cols, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_message, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, gaussian_smooth
@@ -638,15 +638,7 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
 
 def auto_levels(shape, *, min_size_px: int = 24) -> int:
     """Pyramid levels for an image of ``shape`` ``(rows, cols)``: halve until the smaller side would drop below ``min_size_px``."""
-    try:
-        rows, cols = (int(v) for v in shape)
-    except (TypeError, ValueError):
-        msg = f"shape must be (rows, cols), got {shape!r}"
-        raise TypeError(msg) from None
-    if rows < 1 or cols < 1:
-        msg = f"shape must be positive (rows, cols), got {shape!r}"
-        raise ValueError(msg)
-    side = min(rows, cols)
+    side = min(check_shape_rows_cols(shape))
     levels = 1
     while side // 2 >= min_size_px:
         side //= 2

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ._validate import as_vector3, check_finite, check_frame_size, check_int, check_nonnegative_finite, check_positive_finite, float_dtype
+from ._validate import as_vector3, check_finite, check_frame_size, check_int, check_nonnegative_finite, check_positive_finite, check_shape_rows_cols, float_dtype
 from .camera import PinholeCamera, RigidMotion
 
 __all__ = [
@@ -556,14 +556,7 @@ def polygon_coverage(vertices_px, shape) -> np.ndarray:
     if not np.all(np.isfinite(v)):
         msg = "vertices_px must be finite"
         raise ValueError(msg)
-    try:
-        h, w = (int(s) for s in shape)
-    except (TypeError, ValueError):
-        msg = f"shape must be (rows, cols), got {shape!r}"
-        raise TypeError(msg) from None
-    if h < 1 or w < 1:
-        msg = f"shape must be positive, got {shape!r}"
-        raise ValueError(msg)
+    h, w = check_shape_rows_cols(shape)
     out = np.zeros((h, w))
     res = _coverage_block(v, (h, w))
     if res is not None:
