@@ -685,3 +685,104 @@ def test_compressed_tiffs_that_tifffile_cannot_decode_are_read_by_opencv(tmp_pat
             assert tif.pages[0].compression == (1 if name == "f32" else 5)  # LZW (OpenCV leaves float32 uncompressed)
         got = read_image(path, grey=False, dtype=None)
         np.testing.assert_array_equal(got, img)
+
+
+# ------------------------------------------------------------------ acceptance pass 5 (files in and out)
+
+
+def test_pfm_with_crlf_header_reads_right_and_misaligned_data_is_refused(tmp_path):
+    """A Windows writer's CR LF after the scale is one line end: the pixels are not read one byte off."""
+    a = np.arange(12, dtype=np.float32).reshape(3, 4) + 0.5
+    p = tmp_path / "c.pfm"
+    p.write_bytes(b"Pf\r\n4 3\r\n-1.0\r\n" + a[::-1].astype("<f4").tobytes())
+    np.testing.assert_array_equal(read_pfm(p), a)
+    p.write_bytes(b"Pf\n4 3\n-1.0\n" + a[::-1].astype("<f4").tobytes() + b"\0")  # one byte too many
+    with pytest.raises(ImageReadError, match=r"expected 48 bytes of pixel data after the header \(4 x 3 x 1 float32\), found 49"):
+        read_pfm(p)
+
+
+def test_tiff_colour_types_are_honoured_or_refused(tmp_path):
+    """Palette -> its colours, MinIsWhite inverted, 1 bit -> 0/255; stacks, CMYK and YCbCr refused (not read as RGB)."""
+    from PIL import Image
+
+    rng = np.random.default_rng(5)
+    rgb = rng.integers(0, 256, (20, 30, 3), dtype=np.uint8)
+    grey = rng.integers(0, 256, (20, 30), dtype=np.uint8)
+    Image.fromarray(rgb).convert("P").save(tmp_path / "p.tif")
+    Image.fromarray(rgb).convert("P").save(tmp_path / "p.png")
+    np.testing.assert_array_equal(read_image(tmp_path / "p.tif", grey=False, dtype=None), read_image(tmp_path / "p.png", grey=False, dtype=None))
+    tifffile.imwrite(tmp_path / "w.tif", grey, photometric="miniswhite")
+    np.testing.assert_array_equal(read_image(tmp_path / "w.tif", dtype=None), 255 - grey)
+    bits = grey > 128
+    tifffile.imwrite(tmp_path / "b.tif", bits, photometric="minisblack")
+    Image.fromarray(bits).save(tmp_path / "b.png")
+    np.testing.assert_array_equal(read_image(tmp_path / "b.tif", dtype=None), bits.astype(np.uint8) * 255)
+    tifffile.imwrite(tmp_path / "bw.tif", bits)  # tifffile's bilevel default is MinIsWhite: a set bit is black, as viewers show it
+    np.testing.assert_array_equal(read_image(tmp_path / "bw.tif", dtype=None), (~bits).astype(np.uint8) * 255)
+    np.testing.assert_array_equal(read_image(tmp_path / "b.tif", dtype=None), read_image(tmp_path / "b.png", dtype=None))
+    tifffile.imwrite(tmp_path / "s.tif", np.stack([grey, grey, grey]), photometric="minisblack")
+    with pytest.raises(ImageReadError, match=r"'.*s\.tif': holds 3 images \(pages\); expected one image per file"):
+        read_image(tmp_path / "s.tif")
+    with tifffile.TiffWriter(tmp_path / "two.tif") as w:
+        w.write(grey)
+        w.write(grey)
+    with pytest.raises(ImageReadError, match=r"holds 2 images \(pages\)"):
+        read_image(tmp_path / "two.tif")
+    Image.fromarray(rgb).convert("CMYK").save(tmp_path / "k.tif")
+    with pytest.raises(ImageReadError, match=r"holds CMYK \(separated\) colour; expected a grey, RGB or palette TIFF"):
+        read_image(tmp_path / "k.tif")
+    Image.fromarray(rgb).convert("YCbCr").save(tmp_path / "y.tif")
+    with pytest.raises(ImageReadError, match=r"holds YCbCr colour"):
+        read_image(tmp_path / "y.tif")
+    tifffile.imwrite(tmp_path / "planar.tif", np.moveaxis(rgb, -1, 0), photometric="rgb", planarconfig="separate")
+    np.testing.assert_array_equal(read_image(tmp_path / "planar.tif", grey=False, dtype=None), rgb)
+
+
+def test_damaged_jpeg_is_refused_and_decoder_messages_stay_off_stderr(tmp_path, capfd):
+    """A JPEG whose data end early but with an end marker decodes (the rest grey): libjpeg says so on stderr only."""
+    img = np.tile(np.arange(200, dtype=np.uint8), (200, 1))
+    _, enc = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 95])
+    data = enc.tobytes()
+    p = tmp_path / "half.jpg"
+    p.write_bytes(data[: len(data) // 2] + b"\xff\xd9")
+    with pytest.raises(ImageReadError, match=r"'.*half\.jpg': damaged JPEG \(libjpeg: Corrupt JPEG data: premature end of data segment\)"):
+        read_image(p)
+    (tmp_path / "whole.jpg").write_bytes(data)
+    assert read_image(tmp_path / "whole.jpg").shape == (200, 200)
+    _, png = cv2.imencode(".png", np.random.default_rng(1).integers(0, 256, (300, 300), dtype=np.uint8))
+    (tmp_path / "cut.png").write_bytes(png.tobytes()[: int(png.size * 0.95)])
+    with pytest.raises(ImageReadError, match=r"could not decode it as PNG"):
+        read_image(tmp_path / "cut.png")
+    assert capfd.readouterr().err == ""
+
+
+def test_writers_refuse_another_format_s_name_and_values_beyond_float32(tmp_path):
+    with pytest.raises(ValueError, match=r"path must end in \.png, got '.*x\.pfm'"):
+        write_colormap_png(tmp_path / "x.pfm", np.ones((3, 3)))
+    with pytest.raises(ValueError, match=r"path must end in \.ply"):
+        write_ply(tmp_path / "x.png", np.ones((2, 3)))
+    big = np.array([[1.0, 1e300], [2.0, np.nan]])
+    for ext in (".pfm", ".tif"):
+        with pytest.raises(ValueError, match=rf"a value of 1e\+300 does not fit a float32 output .*a \{ext} file stores float32: rescale the map, or write \.npy"):
+            write_array(tmp_path / f"m{ext}", big)
+    with pytest.raises(ValueError, match=r"a value of 1e\+300"):
+        write_pfm(tmp_path / "m.pfm", big)
+    with pytest.raises(ValueError, match=r"a coordinate of 1e\+300 does not fit"):
+        write_ply(tmp_path / "p.ply", np.array([[1.0, 2.0, 1e300]]))
+    np.testing.assert_array_equal(np.load(write_array(tmp_path / "m.npy", big)), big)  # float64 kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.npy"]
+
+
+@pytest.mark.skipif(not hasattr(os, "symlink"), reason="needs symbolic links")
+def test_a_link_to_a_missing_file_counts_as_existing(tmp_path):
+    """os.link refuses a dangling link at the end of the write: it is refused up front, and replaced with force."""
+    link = tmp_path / "dl.pfm"
+    try:
+        os.symlink(tmp_path / "nowhere.pfm", link)
+    except OSError:  # pragma: no cover - no symlink rights (Windows)
+        pytest.skip("cannot create symbolic links here")
+    with pytest.raises(OutputExistsError, match="exists; pass force=True") as info:
+        write_array(link, np.ones((2, 2)))
+    assert info.value.path == link
+    write_array(link, np.ones((2, 2)), force=True)
+    assert not link.is_symlink() and read_pfm(link).shape == (2, 2)

@@ -529,9 +529,10 @@ def test_dynamic_cli_refused_before_any_work(tmp_path, capsys, paper_pngs):
     """Clashing outputs, a negative --sigma-px, images and videos at once: one line, exit 2, nothing written."""
     out = tmp_path / "z.tif"
     cases = [
-        (["--out", out, "--uncertainty", tmp_path / "." / "z.tif"], "output paths must differ from each other"),
+        (["--out", out, "--uncertainty", tmp_path / "." / "z.tif"],
+         f"--out and --uncertainty name the same file '{tmp_path / '.' / 'z.tif'}'; expected a different path for each output"),
         (["--out", out, "--csv", tmp_path / "p.csv", "--ply", tmp_path / "p.ply", "--preview", tmp_path / "z.png", "--figure", tmp_path / "z.png"],
-         "output paths must differ from each other"),
+         f"--preview and --figure name the same file '{tmp_path / 'z.png'}'; expected a different path for each output"),
         (["--out", out, "--sigma-px", "-1"], "--sigma-px must be a finite number >= 0, got -1"),
         (["--out", out, "--sigma-px", "nan"], "--sigma-px must be a finite number >= 0, got nan"),
         (["--out", tmp_path / "c.npz", "--moving-video", tmp_path, "--reference-video", tmp_path, "--crossings", "2"],

@@ -68,6 +68,17 @@ def test_the_offset_turns_the_measured_disparity_into_the_true_depth(views, tmp_
     np.testing.assert_allclose(read_pfm(tmp_path / "zs.pfm")[ok], depth[ok].astype(np.float64) ** 2 / (FOCAL_PX * BASELINE) * read_pfm(tmp_path / "ds.pfm")[ok], rtol=1e-5)
 
 
+def test_an_offset_that_leaves_pixels_without_depth_says_how_many(views, tmp_path, capfd):
+    """The plane measures 3 px: an offset of -4 px puts every pixel at -1 px, no depth; that is warned, with the count."""
+    code, _, err = run_cli(capfd, "stereo", *views, "--out", tmp_path / "z.pfm", "--focal-px", FOCAL_PX, "--baseline", BASELINE, "--disparity-offset-px", -OFFSET_PX)
+    assert code == 0
+    depth = read_pfm(tmp_path / "z.pfm")
+    assert not np.isfinite(depth).any()
+    disparity = _depth(capfd, views, tmp_path / "d.pfm")
+    measured = int(np.count_nonzero(np.isfinite(disparity) & (disparity > 0)))
+    assert f"nfdepth: warning: --disparity-offset-px -4 leaves {measured} of {measured} measured pixels (100.0 %) at a disparity of 0 or less" in err
+
+
 def _ply_points(path: Path) -> np.ndarray:
     data = path.read_bytes()
     end = data.index(b"end_header\n") + len(b"end_header\n")

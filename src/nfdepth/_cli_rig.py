@@ -71,10 +71,16 @@ def write_figures(outs: dict, values, std, *, title: str, unit: str, quantity: s
 
 
 def _distinct(outs: dict, CLIError) -> dict:
+    """``outs`` (``{"out": path, "figure_std": path, ...}``), refused where two options name one file."""
     from .cli import EXIT_USAGE
 
-    if len({str(Path(p).resolve()) for p in outs.values()}) != len(outs):
-        raise CLIError("output paths must differ from each other", EXIT_USAGE)
+    seen = {}
+    for key, path in outs.items():
+        option = "--figure's std figure" if key == "figure_std" else "--" + key.replace("_", "-")
+        resolved = str(Path(path).resolve())
+        if resolved in seen:
+            raise CLIError(f"{seen[resolved]} and {option} name the same file '{path}'; expected a different path for each output", EXIT_USAGE)
+        seen[resolved] = option
     return outs
 
 
@@ -473,7 +479,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--out", required=True, metavar="OUT", help="depth at the edge points of I3: .pfm, .tif or .npy, NaN elsewhere;"
                    " with videos OUT.npz or a folder (depth_NNNNNN.tif, depth_std_NNNNNN.tif per crossing)")
     p.add_argument("--uncertainty", metavar="FILE", help="also write the depth standard deviation here")
-    p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG")
+    p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG: turbo from the map's minimum (blue) to its maximum (red), unknown pixels black, no legend (--figure has a colour bar)")
     p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar and, where the run writes the std (five images: --uncertainty; videos: always, in the NPZ), PNG_std.png; videos: the last crossing")
     p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")

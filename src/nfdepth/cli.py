@@ -129,7 +129,7 @@ def _check_out_dir(path: str, what: str = "--out") -> Path:
 
 #: A negative number as an option's value: argparse's own pattern knows only "-2" and
 #: "-2.5", so "-1e-3" read as an unknown option ("expected 2 arguments").
-_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+_NEGATIVE_NUMBER = re.compile(r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE)  # -inf reaches the finite-number checks
 
 
 class _Parser(argparse.ArgumentParser):
@@ -400,8 +400,9 @@ def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--ou
     if out.is_dir():
         raise CLIError(f"{what} '{out}' is a directory; expected a file path", EXIT_WRITE)
     _check_not_input(out, inputs, what)
-    if out.exists() and not force:
-        raise CLIError(f"{what} '{out}' exists; use --force to overwrite it", EXIT_WRITE)
+    if os.path.lexists(out) and not force:
+        link = " (a link to a missing file)" if not out.exists() else ""
+        raise CLIError(f"{what} '{out}' exists{link}; use --force to overwrite it", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
         problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
@@ -460,7 +461,7 @@ def _exposure_note(results) -> str:
 
 def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     """``nfdepth stereo``'s output paths, checked before any work: ``[--out, --uncertainty, --fill-mask, --preview, --ply]`` (those given) and the figures."""
-    from ._cli_rig import figure_outputs
+    from ._cli_rig import _distinct, figure_outputs
 
     outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
     if args.fill_mask and not args.fill:
@@ -476,9 +477,8 @@ def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     if args.ply:
         outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
     figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
-    every = outputs + list(figures.values())
-    if len({str(p.resolve()) for p in every}) != len(every):
-        raise CLIError("output paths must differ from each other")
+    given = [key for key in ("out", "uncertainty", "fill_mask", "preview", "ply") if getattr(args, key)]
+    _distinct({**dict(zip(given, outputs)), **figures}, CLIError)
     return outputs, figures
 
 
@@ -688,6 +688,8 @@ def _cmd_stereo(args) -> int:
         # the disparities are bounded to 0.1 px; the depths written, exactly (filled ones too)
         values = result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset, depth_range=depth_range)
         unbounded = values if depth_range is None else result.depth(focal_px=focal, baseline=baseline, disparity_offset_px=offset)
+        if offset:
+            _warn_offset_losses(result, unbounded, offset)
         with np.errstate(divide="ignore", invalid="ignore"):
             std = values**2 / (focal * baseline) * result.uncertainty
         std = np.where(np.isfinite(values), std, np.nan)
@@ -737,6 +739,19 @@ def _cmd_stereo(args) -> int:
     return EXIT_OK
 
 
+def _warn_offset_losses(result, depth, offset: float) -> None:
+    """Warn when ``--disparity-offset-px`` leaves measured pixels at a disparity of 0 or less (no depth there)."""
+    measured = np.isfinite(result.disparity) & (result.disparity > 0)
+    lost = int(np.count_nonzero(measured & ~np.isfinite(depth)))
+    if lost:
+        warnings.warn(
+            f"--disparity-offset-px {offset:g} leaves {lost} of {int(measured.sum())} measured pixels ({100.0 * lost / measured.sum():.1f} %) "
+            "at a disparity of 0 or less: they have no depth (NaN); check the offset's sign and size",
+            UserWarning,
+            stacklevel=1,
+        )
+
+
 def _cmd_view(args) -> int:
     from .io import read_image, write_colormap_png
     from . import plot
@@ -747,14 +762,14 @@ def _cmd_view(args) -> int:
             raise CLIError(f"{name} must be a finite number, got {value:g}")
     if args.vmin is not None and args.vmax is not None and args.vmax < args.vmin:
         raise CLIError(f"--vmax must be >= --vmin, got --vmin {args.vmin:g} --vmax {args.vmax:g}")
+    if args.unit is not None and not args.colorbar:  # the bare PNG has no label
+        raise CLIError("--unit labels the colour bar: give --colorbar too")
     data = read_image(args.file, dtype=np.float64)
     if not np.isfinite(data).any():
         warnings.warn(f"'{args.file}' holds no finite value (all unknown): the PNG is all black", UserWarning, stacklevel=1)
     if args.colorbar:
-        fig = plot.colormap_panel(data, title=Path(args.file).name, unit=args.unit, vmin=args.vmin, vmax=args.vmax)
-        if out.exists() and not args.force:
-            raise CLIError(f"'{out}' exists; use --force to overwrite it", EXIT_WRITE)
-        plot.save_figure(fig, out)
+        fig = plot.colormap_panel(data, title=Path(args.file).name, unit=args.unit or "value", vmin=args.vmin, vmax=args.vmax)
+        plot.save_figure(fig, out, force=args.force)
     else:
         write_colormap_png(out, data, vmin=args.vmin, vmax=args.vmax, force=args.force)
     print(f"wrote {out}")
@@ -829,7 +844,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--fill-mask", metavar="FILE", help="with --fill: also write where it filled (1 filled, 0 measured, NaN none; .pfm, .tif or .npy)")
     p.add_argument("--uncertainty", metavar="FILE", help="also write the per-pixel standard deviation here")
-    p.add_argument("--preview", metavar="PNG", help="also write a colour-mapped PNG")
+    p.add_argument("--preview", metavar="PNG", help="also write a bare colour-mapped PNG: turbo from the map's minimum (blue) to its maximum (red), unknown pixels black, no legend (the range is in the run's line; --figure has a colour bar)")
     p.add_argument("--ply", metavar="FILE", help="also write a coloured point cloud (needs --focal-px, --baseline)")
     p.add_argument("--figure", metavar="PNG", help="also write a figure with a colour bar (px or scene units); with --uncertainty also PNG_std.png")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px)")
@@ -879,7 +894,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vmin", type=float, metavar="V", help="value drawn at the colour map's low end (default: the map's minimum; with --colorbar its 1st percentile)")
     p.add_argument("--vmax", type=float, metavar="V", help="value drawn at the high end (default: the maximum; with --colorbar the 99th percentile)")
     p.add_argument("--colorbar", action="store_true", help="draw a figure with a colour bar (an arrow at an end marks values beyond it)")
-    p.add_argument("--unit", default="value", help="colour-bar label, e.g. 'disparity (px)' or 'depth (m)' (default: value)")
+    p.add_argument("--unit", default=None, help="colour-bar label with --colorbar, e.g. 'disparity (px)' or 'depth (m)' (default: value)")
     p.add_argument("--force", action="store_true", help="overwrite an existing PNG")
     p.set_defaults(func=_cmd_view)
 
@@ -1017,6 +1032,8 @@ def _main(argv, debug: bool) -> int:
         text = " ".join(str(exc).split()) or type(exc).__name__
         if type(exc) in _RAW_OS_ERRORS and exc.filename and exc.strerror:  # not "[Errno 1] Operation not permitted: 'x'"
             text = f"cannot {'read' if code == EXIT_READ else 'write'} '{exc.filename}': {exc.strerror}"
+        if getattr(exc, "path", None) is not None and type(exc).__name__ == "OutputExistsError":  # a file that appeared during the run
+            text = f"'{exc.path}' exists; use --force to overwrite it"
         if code == EXIT_USAGE:
             text = _option_text(text, args)
         if code == EXIT_INTERNAL:

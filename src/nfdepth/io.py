@@ -30,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -51,6 +52,7 @@ __all__ = [
     "LUMA_WEIGHTS",
     "read_image",
     "make_output_folder",
+    "require_extension",
     "to_float32_map",
     "to_grey",
     "read_pfm",
@@ -88,7 +90,15 @@ class ImageRangeError(ImageReadError):
 
 
 class OutputExistsError(NFDepthError):
-    """The output file exists and ``force`` was not given."""
+    """The output file exists and ``force`` was not given (``path``: that file, when known)."""
+
+    def __init__(self, message: str, path=None):
+        super().__init__(message)
+        self.path = path
+
+
+def _exists_error(path: Path) -> OutputExistsError:
+    return OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it", path)
 
 
 class OutputWriteError(NFDepthError):
@@ -172,7 +182,8 @@ def read_pfm(path) -> np.ndarray:
     return _decode_pfm(path, data)
 
 
-_PFM_HEADER = re.compile(rb"\A(P[Ff])\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s")
+# the scale ends with one whitespace byte (a line end; CR LF from Windows writers counts as one)
+_PFM_HEADER = re.compile(rb"\A(P[Ff])\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)(?:\r\n|\s)")
 
 
 def _decode_pfm(path, data: bytes) -> np.ndarray:
@@ -192,6 +203,8 @@ def _decode_pfm(path, data: bytes) -> np.ndarray:
     body = data[m.end() :]
     if len(body) < count * 4:
         raise _read_error(path, f"truncated PFM: expected {count * 4} bytes of pixel data, found {len(body)}")
+    if len(body) > count * 4:  # a header read one byte short or long would shift every value
+        raise _read_error(path, f"expected {count * 4} bytes of pixel data after the header ({width} x {height} x {channels} float32), found {len(body)}")
     arr = np.frombuffer(body, dtype=dtype, count=count).astype(np.float32)
     shape = (height, width) if channels == 1 else (height, width, 3)
     return np.ascontiguousarray(arr.reshape(shape)[::-1])
@@ -211,6 +224,51 @@ def _read_bytes(path: Path) -> bytes:
     return data
 
 
+@contextlib.contextmanager
+def _decoder_messages(lines: list):
+    """Collect what C libraries (libjpeg, libpng) print on file descriptor 2 meanwhile into ``lines``.
+
+    OpenCV's decoders report damage there, not to the caller: a JPEG whose data
+    end early still decodes (the rest of the image grey) with only libjpeg's
+    "Corrupt JPEG data: premature end of data segment" on stderr. Lines that
+    are no decoder's go back to stderr. Without a file descriptor 2 nothing
+    is collected.
+    """
+    try:
+        saved = os.dup(2)
+    except OSError:  # pragma: no cover - no stderr (a windowed process)
+        yield
+        return
+    try:
+        with tempfile.TemporaryFile() as tmp:
+            with contextlib.suppress(Exception):
+                sys.stderr.flush()
+            os.dup2(tmp.fileno(), 2)
+            try:
+                yield
+            finally:
+                os.dup2(saved, 2)
+                tmp.seek(0)
+                text = tmp.read().decode("utf-8", errors="replace")
+    finally:
+        os.close(saved)
+    others = []
+    for line in text.splitlines():
+        line = line.strip()
+        if line.startswith(_DECODER_PREFIXES):
+            lines.append(line)
+        elif line:
+            others.append(line)
+    if others:  # pragma: no cover - another thread's output meanwhile
+        print("\n".join(others), file=sys.stderr)
+
+
+# what libjpeg, libpng and OpenCV's own decoders print (OpenCV's log level is lowered meanwhile)
+_DECODER_PREFIXES = ("Corrupt JPEG data", "Premature end of JPEG file", "libpng", "Invalid SOS", "Bogus", "Unsupported", "[ WARN", "[ERROR", "[ INFO")
+# libjpeg's warnings that leave the image as encoded (stray bytes between segments)
+_HARMLESS_JPEG = ("extraneous bytes before marker",)
+
+
 def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
     if ext in (".jpg", ".jpeg") and not data.rstrip(b"\0").endswith(b"\xff\xd9"):
         raise _read_error(path, "truncated JPEG (no end-of-image marker)")
@@ -222,15 +280,21 @@ def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
         previous = set_level(0) if set_level is not None else None
     except Exception:  # pragma: no cover - an OpenCV without either
         previous = None
+    messages: list[str] = []
     try:
-        arr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        with _decoder_messages(messages):
+            arr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     except cv2.error as exc:  # pragma: no cover - imdecode usually returns None
         raise _read_error(path, f"OpenCV could not decode it ({exc})") from None
     finally:
         if previous is not None:
             set_level(previous)
     if arr is None:
-        raise _read_error(path, f"OpenCV could not decode it as {ext[1:].upper()} (broken or truncated file?)")
+        said = f"({messages[0]})" if messages else "(broken or truncated file?)"
+        raise _read_error(path, f"OpenCV could not decode it as {ext[1:].upper()} {said}")
+    damage = [m for m in messages if m.startswith(("Corrupt JPEG data", "Premature end of JPEG file")) and not any(h in m for h in _HARMLESS_JPEG)]
+    if damage:  # decoded, but part of the image is made up
+        raise _read_error(path, f"damaged JPEG (libjpeg: {damage[0]}); part of the image would be made up")
     if arr.ndim == 3 and arr.shape[-1] == 3:
         arr = arr[..., ::-1]  # BGR -> RGB
     elif arr.ndim == 3 and arr.shape[-1] == 4:
@@ -239,6 +303,12 @@ def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
 
 
 def _decode_tiff(path: Path) -> np.ndarray:
+    """One image of a TIFF file as stored values: grey (0 black), RGB(A) or grey + alpha, (H, W) or (H, W, C).
+
+    The colour type (photometric tag) is honoured: a palette becomes RGB, MinIsWhite is inverted, 1-bit
+    images are 0/255 (as OpenCV reads 1-bit PNG and PBM). CMYK, CIELab and uncompressed YCbCr are
+    refused, and so is a file with more than one full-size image (page).
+    """
     import logging
 
     import tifffile
@@ -247,7 +317,15 @@ def _decode_tiff(path: Path) -> np.ndarray:
     level = log.level
     log.setLevel(logging.CRITICAL + 1)
     try:
-        arr = tifffile.imread(path)
+        with tifffile.TiffFile(path) as tif:
+            pages = [p for p in tif.pages if not int(getattr(p, "subfiletype", 0) or 0) & 1]  # not the thumbnails
+            if len(pages) > 1:
+                raise _read_error(path, f"holds {len(pages)} images (pages); expected one image per file (save each view as its own file)")
+            page = pages[0] if pages else tif.pages[0]
+            photometric = int(page.photometric)
+            arr = _tiff_colours(path, page, photometric)
+    except ImageReadError:
+        raise
     except Exception as exc:  # tifffile raises several types on broken files
         reason = f"{type(exc).__name__}: {exc}"
         try:  # a compression tifffile reads only with the optional imagecodecs (LZW, OpenCV's own default): OpenCV reads it
@@ -259,11 +337,46 @@ def _decode_tiff(path: Path) -> np.ndarray:
         raise _read_error(path, f"not a readable TIFF ({reason}){hint}") from None
     finally:
         log.setLevel(level)
-    arr = np.asarray(arr)
     if arr.size == 0:
         raise _read_error(path, f"not a readable TIFF (no image data; array of shape {arr.shape})")
-    if arr.ndim == 3 and arr.shape[0] in (3, 4) and arr.shape[-1] not in (1, 2, 3, 4):
+    return arr
+
+
+# TIFF photometric interpretations (TIFF 6.0, section 8 and 21-23)
+_MINISWHITE, _MINISBLACK, _RGB, _PALETTE, _SEPARATED, _YCBCR = 0, 1, 2, 3, 5, 6
+_TIFF_JPEG = (6, 7)  # old- and new-style JPEG compression: the decoder returns RGB
+_PHOTOMETRIC_NAMES = {4: "a transparency mask", 5: "CMYK (separated)", 6: "YCbCr", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32803: "a colour filter array (raw)", 32844: "LogL", 32845: "LogLuv", 34892: "linear raw"}
+
+
+def _tiff_colours(path: Path, page, photometric: int) -> np.ndarray:
+    """A TIFF page's pixels in the colours :func:`read_image` expects (see :func:`_decode_tiff`)."""
+    jpeg_rgb = photometric == _YCBCR and int(page.compression) in _TIFF_JPEG
+    if photometric not in (_MINISWHITE, _MINISBLACK, _RGB, _PALETTE) and not jpeg_rgb:
+        kind = _PHOTOMETRIC_NAMES.get(photometric, f"photometric {photometric}")
+        raise _read_error(path, f"holds {kind} colour; expected a grey, RGB or palette TIFF (convert it to one of those first)")
+    arr = np.asarray(page.asarray())
+    if arr.ndim == 3 and int(page.planarconfig) == 2 and int(page.samplesperpixel) == arr.shape[0]:
         arr = np.moveaxis(arr, 0, -1)  # planar (C, H, W) -> (H, W, C)
+    if photometric == _PALETTE:
+        cmap = np.asarray(page.colormap)
+        if cmap is None or cmap.ndim != 2 or cmap.shape[0] != 3 or arr.ndim != 2 or not np.issubdtype(arr.dtype, np.integer):
+            raise _read_error(path, "a palette TIFF without a usable colour map")
+        if int(arr.max(initial=0)) >= cmap.shape[1]:
+            raise _read_error(path, f"palette index {int(arr.max())} beyond its colour map of {cmap.shape[1]} entries")
+        if int(cmap.max(initial=0)) > 255:  # 16-bit entries (the TIFF norm): the 8-bit colour is the high byte
+            cmap = cmap >> 8
+        return np.ascontiguousarray(cmap.astype(np.uint8)[:, arr].transpose(1, 2, 0))
+    if arr.dtype == bool:  # 1 bit: 0/255, as OpenCV reads 1-bit PNG and PBM
+        arr = arr.astype(np.uint8) * np.uint8(255)
+        if photometric == _MINISWHITE:
+            arr = np.uint8(255) - arr
+        return arr
+    if photometric == _MINISWHITE:
+        if not np.issubdtype(arr.dtype, np.unsignedinteger):
+            raise _read_error(path, f"a MinIsWhite (inverted) TIFF of {arr.dtype} values; expected it of unsigned integers, or a MinIsBlack TIFF")
+        bits = int(page.bitspersample)
+        top = (1 << bits) - 1 if bits < arr.dtype.itemsize * 8 else np.iinfo(arr.dtype).max
+        arr = arr.dtype.type(top) - arr
     return arr
 
 
@@ -461,14 +574,14 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
         raise OutputWriteError(f"cannot write '{path}': it is a directory")
     if not parent.is_dir():
         raise OutputWriteError(f"cannot write '{path}': directory '{parent}' does not exist")
-    if path.exists() and not force:
-        raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it")
+    if os.path.lexists(path) and not force:  # (a link to a missing file too: os.link would refuse it)
+        raise _exists_error(path)
     try:
         fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
     except OSError as exc:
         raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc} (directory '{parent}')") from None
     tmp = Path(tmp_name)
-    existed = path.exists()
+    existed = os.path.lexists(path)
     try:
         with os.fdopen(fd, "wb") as fh:
             writer_fn(fh)
@@ -481,10 +594,10 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
             try:
                 os.link(tmp, path)  # fails if the target appeared meanwhile
             except FileExistsError:
-                raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it") from None
+                raise _exists_error(path) from None
             except OSError:  # no hard links on this file system
-                if path.exists():
-                    raise OutputExistsError(f"'{path}' exists; pass force=True (--force on the command line) to replace it") from None
+                if os.path.lexists(path):
+                    raise _exists_error(path) from None
                 os.replace(tmp, path)
     except OSError as exc:
         raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc}") from None
@@ -500,6 +613,13 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
     return path
 
 
+def require_extension(path, ext: str, *, hint: str = "") -> None:
+    """Refuse a ``path`` that does not end in ``ext`` (case-insensitive): a file's bytes under another format's name mislead every reader."""
+    if Path(path).suffix.lower() != ext:
+        msg = f"path must end in {ext}, got {str(path)!r}{hint}"
+        raise ValueError(msg)
+
+
 def _as_map(name: str, array, *, allow_colour: bool = False) -> np.ndarray:
     arr = np.asarray(array)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
@@ -513,11 +633,16 @@ def _as_map(name: str, array, *, allow_colour: bool = False) -> np.ndarray:
     return arr
 
 
+def _float32_payload(arr: np.ndarray, ext: str) -> np.ndarray:
+    """``arr`` as float32 for a ``.pfm`` or ``.tif`` file; a finite value it cannot hold is refused (:func:`to_float32_map`)."""
+    return to_float32_map(arr, what="a value", hint=f"a {ext} file stores float32: rescale the map, or write .npy (float64 kept)")
+
+
 def _pfm_bytes(arr: np.ndarray) -> bytes:
     tag = b"PF" if arr.ndim == 3 else b"Pf"
     h, w = arr.shape[:2]
     header = tag + b"\n" + f"{w} {h}\n-1.0\n".encode("ascii")
-    body = np.ascontiguousarray(arr[::-1], dtype="<f4").tobytes()
+    body = np.ascontiguousarray(_float32_payload(arr, ".pfm")[::-1], dtype="<f4").tobytes()
     return header + body
 
 
@@ -538,9 +663,7 @@ def write_pfm(path, array, *, force: bool = False) -> Path:
     -------
     pathlib.Path
     """
-    if Path(path).suffix.lower() != ".pfm":  # PFM bytes under another name mislead every reader
-        msg = f"path must end in .pfm, got {str(path)!r} (write_array picks the format from the extension)"
-        raise ValueError(msg)
+    require_extension(path, ".pfm", hint=" (write_array picks the format from the extension)")
     arr = _as_map("array", array, allow_colour=True)
     payload = _pfm_bytes(arr)
     return atomic_write(path, lambda fh: fh.write(payload), force=force)
@@ -610,7 +733,7 @@ def write_array(path, array, *, force: bool = False) -> Path:
     import io as _io
 
     buf = _io.BytesIO()  # tifffile wants a named file or a buffer, not an os.fdopen object
-    tifffile.imwrite(buf, np.ascontiguousarray(arr, dtype=np.float32))
+    tifffile.imwrite(buf, np.ascontiguousarray(_float32_payload(arr, ext)))
     payload = buf.getvalue()
     return atomic_write(path, lambda fh: fh.write(payload), force=force)
 
@@ -645,6 +768,7 @@ def write_colormap_png(path, array, *, vmin=None, vmax=None, cmap: str = "turbo"
     """
     from matplotlib import colormaps
 
+    require_extension(path, ".png")
     arr = _as_map("array", array).astype(np.float64)
     if cmap not in colormaps:
         msg = f"cmap must be a Matplotlib colour map name such as 'turbo', 'viridis' or 'gray', got {cmap!r}"
@@ -688,6 +812,7 @@ def write_ply(path, points_xyz, *, colors=None, force: bool = False) -> Path:
     -------
     pathlib.Path
     """
+    require_extension(path, ".ply")
     pts = np.asarray(points_xyz)
     if pts.dtype == object or not np.issubdtype(pts.dtype, np.number) or np.iscomplexobj(pts):
         msg = f"points_xyz must be a real numeric array, got dtype {pts.dtype}"
@@ -696,6 +821,7 @@ def write_ply(path, points_xyz, *, colors=None, force: bool = False) -> Path:
         msg = f"points_xyz must have shape (N, 3), got shape {pts.shape}"
         raise ValueError(msg)
     keep = np.all(np.isfinite(pts), axis=1)
+    to_float32_map(pts[keep], what="a coordinate", hint="a .ply file stores float32: rescale the points (another unit)")
     fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
     col = None
     if colors is not None:

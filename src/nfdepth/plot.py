@@ -32,14 +32,14 @@ __all__ = [
 ]
 
 
-def save_figure(fig: Figure, path, *, dpi: int = 110) -> Path:
-    """Write ``fig`` as PNG atomically, replacing ``path`` (:func:`nfdepth.io.atomic_write`: mode from the umask)."""
+def save_figure(fig: Figure, path, *, dpi: int = 110, force: bool = True) -> Path:
+    """Write ``fig`` as PNG atomically (:func:`nfdepth.io.atomic_write`: mode from the umask); an existing ``path`` is replaced unless ``force=False``."""
     from .io import atomic_write
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
-    return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight"), force=True)
+    return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight"), force=force)
 
 
 def _figure(width_in=4.0, height_in=4.0) -> Figure:

@@ -1178,7 +1178,9 @@ def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force
     unknown), and of :data:`NPZ_DENSE_ARRAYS` when the frames have dense
     maps; with ``camera`` also ``focal_px``, ``cx_px``, ``cy_px``.
     """
-    from .io import atomic_write
+    from .io import atomic_write, require_extension
+
+    require_extension(path, ".npz")
 
     results = list(results)
     payload = {
@@ -1457,7 +1459,9 @@ def write_crossings_npz(results, path, *, camera: PinholeCamera | None = None, f
     off the edge points); with ``camera`` also ``focal_px``, ``cx_px``,
     ``cy_px``.
     """
-    from .io import atomic_write
+    from .io import atomic_write, require_extension
+
+    require_extension(path, ".npz")
 
     results = list(results)
     payload = {
