@@ -137,6 +137,15 @@ def test_streaming_equals_from_scratch():
     assert stream.frames_seen == len(frames)
     stream.reset()
     assert stream.push(frames[0]) is None
+    # after a reset (a scene cut) the frames may change size: the stream follows the next frame's
+    stream.reset()
+    other = _sequence((65, 80), n=3, shift=(0.6, -0.3), seed=6)
+    assert stream.push(other[0]) is None and stream.push(other[1]) is None
+    got = stream.push(other[2])
+    want = normal_flow_edges(other, sigma_px=1.8, frame_interval=0.25)
+    np.testing.assert_array_equal(got.mask, want.mask)
+    with pytest.raises(ValueError, match=r"frame 3 has shape \(64, 80\), but this stream's frames have shape \(65, 80\)"):
+        stream.push(frames[0])  # without a reset the size stays
 
 
 def test_kept_results_are_never_overwritten():

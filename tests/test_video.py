@@ -1066,3 +1066,42 @@ def test_swapped_videos_are_named_as_a_likely_cause(pair):
     assert len(behind) == 1 and behind[0].startswith(f"crossing {PAIR_CROSSINGS[0]}: "), behind
     assert behind[0].endswith("are the moving and the reference videos swapped, or is the rig's motion of the wrong sign (V = -T for a camera moving by T)?")
     assert res.valid.sum() == 0
+
+
+# ------------------------------------------------------------------ acceptance pass 5 (video)
+
+
+def test_library_refuses_fewer_than_three_frames(scene):
+    cam = synthetic.paper_camera()
+    with pytest.raises(ValueError, match=r"^depth_from_video needs at least 3 frames, got 0 \(an empty iterable; a video file or folder: pass read_video\(path\)\)$"):
+        list(depth_from_video([], camera=cam, velocity=STEP))
+    with pytest.raises(ValueError, match=r"^depth_from_video needs at least 3 frames, got 2$"):
+        list(depth_from_video(scene.frames[:2], camera=cam, velocity=STEP))
+
+
+def test_a_folder_of_frames_leaves_hidden_files_out(sequence_dir):
+    """macOS's ._f0.png beside f0.png became frame 0 (a decode error, or every frame one off against the poses)."""
+    (sequence_dir / "._f0.png").write_bytes(b"\0\5\26\7 resource fork")
+    (sequence_dir / ".hidden.png").write_bytes((sequence_dir / "f0.png").read_bytes())
+    names = [Path(p).name for p in read_video(sequence_dir).paths]
+    assert names == [f"f{k}.png" for k in range(N_FRAMES)]
+
+
+def test_poses_with_a_byte_order_mark_are_read(tmp_path):
+    """Excel's "CSV UTF-8" opens with a byte-order mark: the header read '\\ufeffframe'."""
+    from nfdepth.rig import load_poses
+
+    p = tmp_path / "p.csv"
+    p.write_bytes("frame,x,y,z\n0,0,0,0\n1,1,0,0\n2,2,0,0\n".encode("utf-8-sig"))
+    poses = load_poses(p)
+    np.testing.assert_array_equal(np.asarray(poses.positions)[:, 0], [0.0, 1.0, 2.0])
+
+
+def test_video_output_folder_that_cannot_be_made_is_a_write_error(tmp_path, capsys, sequence_dir, rail_rig):
+    (tmp_path / "afile").write_text("x")
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "afile" / "sub", "--quiet")
+    assert (code, err) == (4, f"nfdepth: error: --out '{tmp_path / 'afile' / 'sub'}': '{tmp_path / 'afile'}' is not a directory\n")
+    from nfdepth.io import OutputWriteError, make_output_folder
+
+    with pytest.raises(OutputWriteError, match=r"cannot write '.*afile.*sub': '.*afile' is not a directory"):
+        make_output_folder(tmp_path / "afile" / "sub")

@@ -89,7 +89,12 @@ def _check_sigma(args, CLIError) -> dict:
         raise CLIError(f"--sigma-px must be a finite number >= 0, got {args.sigma_px:g}")
     if args.unit is not None and not args.figure:  # it labels nothing else
         raise CLIError("--unit labels the colour bar of --figure: give --figure too")
-    return {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
+    options = {} if args.sigma_px is None else {"sigma_px": args.sigma_px}
+    if args.noise_std is not None:
+        if not (np.isfinite(args.noise_std) and args.noise_std > 0):
+            raise CLIError(f"--noise-std must be a positive number of grey levels, got {args.noise_std:g}")
+        options["noise_std"] = args.noise_std
+    return options
 
 
 def _unit(args) -> str:
@@ -351,7 +356,8 @@ def _video_output(args, CLIError):
         raise CLIError(f"--out '{out}' exists and is not a folder", EXIT_WRITE)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
-        raise CLIError(f"--out '{out}': directory '{parent}' does not exist", EXIT_WRITE)
+        problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+        raise CLIError(f"--out '{out}': {problem}", EXIT_WRITE)
     if out.is_dir() and not args.force:
         for pattern in ("depth_*.tif", "dense_depth_*.tif"):
             if any(out.glob(pattern)):
@@ -402,11 +408,14 @@ def _cmd_video(args) -> int:
     progress = _Progress(total, quiet=args.quiet)
     frames_seen = [0]
 
+    source_ended = [False]
+
     def counted():
         for f in itertools.chain([first], frames_iter):
             frames_seen[0] += 1
             progress.step()
             yield f
+        source_ended[0] = True
 
     results = []
     written = 0
@@ -426,12 +435,12 @@ def _cmd_video(args) -> int:
                 make_output_folder(out)
                 write_video_frame(res, out, force=args.force)
                 written += 1
-    except BaseException:
+    except BaseException as exc:
         progress.abort()
+        if isinstance(exc, ValueError) and source_ended[0] and frames_seen[0] < 3:  # the library's own refusal, told with the file
+            raise CLIError(f"video needs at least 3 frames, '{args.source}' gave {frames_seen[0]}") from None
         raise
     progress.close()
-    if frames_seen[0] < 3:
-        raise CLIError(f"video needs at least 3 frames, '{args.source}' gave {frames_seen[0]}")
     if kind == "npz":
         write_video_npz(results, out, camera=rig.camera, force=args.force)
         written = len(results)
@@ -485,6 +494,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")
     p.add_argument("--csv", metavar="FILE", help="also write the points as CSV: row,col,depth,depth_std (sub-pixel positions)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 3)")
+    p.add_argument("--noise-std", type=float, metavar="GREY", help="the images' noise std in grey levels, for the error bar (default: estimated from the images; compressed video and JPEG hide most of it, which makes the error bar too narrow: give it here)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_dynamic)
 
@@ -496,6 +506,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--figure", metavar="PNG", help="also write figures with a colour bar of the last frame's fused depth (PNG) and std (PNG_std.png)")
     p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 2)")
+    p.add_argument("--noise-std", type=float, metavar="GREY", help="the images' noise std in grey levels, for the error bar (default: estimated from the images; compressed video and JPEG hide most of it, which makes the error bar too narrow: give it here)")
     p.add_argument(
         "--levels",
         type=int,

@@ -411,13 +411,22 @@ def match_nearby_exposures(frames, *, middle: int):
     return frames, [None if k == middle or total[k] == (1.0, 0.0) else total[k] for k in range(len(frames))]
 
 
+_PLATEAU_TOLERANCE = 1e-6  # of an image's range: rounding, far below a grey level of 8 or 16 bits
+
+
 def _plateaus(img) -> tuple[np.ndarray, np.ndarray]:
-    """The pixels at ``img``'s own highest and lowest value, each where at least 0.1 % of them hold it (a clipped plateau), else none."""
+    """The pixels at ``img``'s own highest and lowest value, each where at least 0.1 % of them hold it (a clipped plateau), else none.
+
+    "At" is within ``_PLATEAU_TOLERANCE`` of the range: float images rendered
+    or converted in float64 hold their white as 255 and 255.0000000000029
+    side by side. A constant image is one plateau (all of it at its bottom).
+    """
     lo, hi = float(img.min()), float(img.max())
     none = np.zeros(np.shape(img), bool)
     if not hi > lo:
-        return none, none
-    top, bottom = img >= hi, img <= lo
+        return none, np.ones(np.shape(img), bool)
+    tol = _PLATEAU_TOLERANCE * (hi - lo)
+    top, bottom = img >= hi - tol, img <= lo + tol
     return (top if top.mean() >= 1e-3 else none), (bottom if bottom.mean() >= 1e-3 else none)
 
 

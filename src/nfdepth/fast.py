@@ -1085,10 +1085,12 @@ class StreamingNormalFlow:
         return self._count
 
     def reset(self) -> None:
-        """Forget all frames (e.g. at a scene cut)."""
+        """Forget all frames (e.g. at a scene cut); the next frame may have another size."""
         while self._ring:
             self._spare.append(self._ring.popleft())
         self._count = 0
+        self._shape = None  # the workspace and spare buffers follow the next frame's size
+        self._spare.clear()
 
     def push(self, frame) -> NormalFlowEdges | None:
         """Add the next frame; return the result for the latest triple, or None before the third frame."""

@@ -526,7 +526,14 @@ def make_output_folder(path, *, parents: bool = False) -> Path:
     if not path.is_dir():
         if parents and path.parent != path and not path.parent.is_dir():
             make_output_folder(path.parent, parents=True)
-        path.mkdir()
+        parent = path.parent if str(path.parent) else Path(".")
+        if not parent.is_dir():
+            problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+            raise OutputWriteError(f"cannot write '{path}': {problem}")
+        try:
+            path.mkdir()
+        except OSError as exc:  # a file there, a read-only or virtual parent (/proc)
+            raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc}") from None
         if COMPLETED_WRITES is not None:
             COMPLETED_WRITES.append((path, False))
     return path

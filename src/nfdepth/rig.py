@@ -267,7 +267,7 @@ def load_poses(path) -> Poses:
     if not path.is_file():
         raise FileNotFoundError(f"cannot read poses file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
     try:
-        with path.open(newline="") as fh:
+        with path.open(newline="", encoding="utf-8-sig") as fh:  # (-sig: Excel's "CSV UTF-8" opens with a byte-order mark)
             rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
     except UnicodeDecodeError:
         raise RigError(f"poses '{path}': not a UTF-8 text file") from None

@@ -229,7 +229,8 @@ def read_video(path) -> FrameSource:
     p = Path(text)
     if p.is_dir():
         try:
-            files = [f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READ_EXTENSIONS]
+            # not hidden files (macOS's ._*.png resource forks, editors' backups), as the glob form leaves them out
+            files = [f for f in p.iterdir() if f.is_file() and f.suffix.lower() in READ_EXTENSIONS and not f.name.startswith(".")]
         except OSError as exc:  # e.g. no read permission
             raise ImageReadError(f"cannot read frames from '{p}': {exc.strerror or exc}") from None
         if not files:
@@ -1052,6 +1053,10 @@ def depth_from_video(
         if rounded
         else ""
     )
+    if not triples:  # (the command line refuses such a source before; a library caller gets no silent nothing)
+        seen = len(window)
+        msg = f"depth_from_video needs at least 3 frames, got {seen}" + ("" if seen else " (an empty iterable; a video file or folder: pass read_video(path))")
+        raise ValueError(msg)
     if triples and not moved:
         raise ValueError(
             f"the camera does not move in any of the {triples} frame triples (frames {_frame_list(static)} have the same position"
