@@ -164,7 +164,12 @@ def main(argv=None) -> int:
         parser.error("--frames-before N (N >= 1) goes with --dense alone")
     if args.drop_frame and args.turn_deg_per_frame:
         parser.error("--drop-frame and --turn-deg-per-frame do not go together (a turned row ends at the frame after the reference)")
-    root = datasets.data_root(args.data)
+    if not (np.isfinite(args.turn_deg_per_frame) and abs(args.turn_deg_per_frame) <= 10):
+        parser.error(f"--turn-deg-per-frame must be a number of degrees within +-10 (the rows turn it for every view), got {args.turn_deg_per_frame:g}")
+    try:
+        root = datasets.data_root(args.data)
+    except datasets.DataNotFoundError as exc:
+        parser.error(str(exc))
     if args.frames_before is not None:
         print("| scene | view | frames before | dense cover | bad-1px | median rel | median abs(error) / std | s/frame |")
         print("| --- | --- | --- | --- | --- | --- | --- | --- |")

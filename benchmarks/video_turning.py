@@ -83,7 +83,10 @@ def fused(step, turn_deg, seed):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=4, help="noise seeds to average (default 4)")
-    seeds = range(parser.parse_args(argv).seeds)
+    count = parser.parse_args(argv).seeds
+    if count < 1:
+        parser.error(f"--seeds must be at least 1, got {count}")
+    seeds = range(count)
     print("| turn per frame | rotational flow at the centre | eq. 4 with `A` | turned frames |")
     print("| --- | --- | --- | --- |")
     for deg in (0.1, 0.3, 1.0, 2.0):

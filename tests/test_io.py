@@ -227,6 +227,8 @@ def test_colour_bar_range_checks_and_clipping_arrows():
     assert extend(vmin=-1, vmax=99) == ("neither", (-1, 99))
     assert extend(vmin=-1, vmax=50) == ("max", (-1, 50))
     assert extend(vmin=500)[0] == "min"  # one end given beyond the data: the other follows it (no vmax < vmin error)
+    empty = plot.colormap_panel(np.full((4, 4), np.nan), title="r", unit="depth")  # a run with no depth: no 0..1 scale
+    assert len(empty.axes) == 1 and [t.get_text() for t in empty.axes[0].texts] == ["no finite value"]
 
 
 def test_atomic_write_file_mode_follows_umask(tmp_path):

@@ -1105,3 +1105,44 @@ def test_video_output_folder_that_cannot_be_made_is_a_write_error(tmp_path, caps
 
     with pytest.raises(OutputWriteError, match=r"cannot write '.*afile.*sub': '.*afile' is not a directory"):
         make_output_folder(tmp_path / "afile" / "sub")
+
+
+def test_a_truncated_video_file_is_reported(tmp_path, scene):
+    """Half an MJPG AVI decodes its first frames and then stops: that was taken as the whole video, without a word."""
+    frames = [scene.frames[k % N_FRAMES] for k in range(40)]
+    whole = _write_avi(tmp_path / "whole.avi", frames)
+    assert sum(1 for _ in read_video(whole)) == 40  # an intact file: no warning (filterwarnings = error)
+    cut = tmp_path / "cut.avi"
+    data = whole.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.warns(UserWarning, match=r"video '.*cut\.avi' declares 40 frames, but only the first (\d+) could be decoded \(a truncated or damaged file\?\)"):
+        n = sum(1 for _ in read_video(cut))
+    assert 5 < n < 30
+
+
+def test_a_dense_map_behind_the_camera_is_reported_without_edge_points():
+    """A camera moving opposite to its given velocity over a band-limited texture (no edge point survives the corner
+    rule): the dense maps came out half negative with no sign warning; now the run says so."""
+    from nfdepth import PinholeCamera
+
+    rng = np.random.default_rng(2)
+    h, w, f, z, step = 96, 128, 300.0, 10.0, 0.5
+    texture = cv2.GaussianBlur(rng.normal(size=(h, w + 8)).astype(np.float32), (0, 0), 2.0)
+    texture = 128 + 40 * texture / texture.std()
+    cols = np.arange(w, dtype=np.float32)
+    frames = []
+    for k in range(5):  # the content moves toward +col: the camera moves toward -X
+        shifted = np.stack([np.interp(cols + 4 - k * step, np.arange(w + 8), row) for row in texture])
+        frames.append((shifted + rng.normal(0, 1.0, shifted.shape)).astype(np.float32))
+    cam = PinholeCamera(focal_px=f, width_px=w, height_px=h)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = list(depth_from_video(frames, camera=cam, velocity=(step * z / f, 0, 0), dense=True))
+    said = [str(c.message) for c in caught]
+    behind = [s for s in said if "most of the dense map lies behind the camera" in s]
+    assert len(behind) == 1 and "the camera moves opposite to its given positions" in behind[0], said
+    assert all(np.nanmedian(r.dense_inverse_depth) < 0 for r in results)
+    # no edge point in any frame (a blob texture): said once for the run, in the video's own words (was once per frame,
+    # naming max_corner_ratio, which depth_from_video does not take)
+    none = [s for s in said if s.startswith("no edge points")]
+    assert len(none) == 1 and none[0].startswith("no edge points: in 3 of 3 frames (1-3), e.g. frame 1: all ") and "max_corner_ratio" not in none[0], none

@@ -425,8 +425,8 @@ def _cmd_video(args) -> int:
     try:
         for res in depth_from_video(counted(), rig=rig, **options):
             last = res
-            if not np.isfinite(res.depth).any():
-                empty.append(res.index)
+            if not np.isfinite(res.depth).any() and (res.dense_inverse_depth is None or not np.isfinite(res.dense_depth).any()):
+                empty.append(res.index)  # no depth at its edge points, nor (--dense) in its dense map
             if res.exposure is not None:
                 matched.append((res.index, [fit for fit in res.exposure if fit is not None]))
             if kind == "npz":

@@ -150,7 +150,7 @@ def yz_projection_panel(points, *, true_points=None, title: str, unit: str = "sc
 
 
 def colormap_panel(array, *, title: str, unit: str, cmap: str = "turbo", vmin=None, vmax=None) -> Figure:
-    """A colour map with a colour bar in ``unit`` (NaN drawn black).
+    """A colour map with a colour bar in ``unit`` (NaN drawn black; an all-NaN map says so, with no colour bar).
 
     ``vmin``/``vmax`` default to the finite values' 1st and 99th
     percentiles; values beyond the range are drawn at its ends and the
@@ -181,7 +181,10 @@ def colormap_panel(array, *, title: str, unit: str, cmap: str = "turbo", vmin=No
     im = ax.imshow(np.ma.masked_invalid(arr), cmap=colours, vmin=lo, vmax=hi, interpolation="nearest")
     ax.set_title(title)
     ax.set_axis_off()
-    below, above = bool(finite.size and finite.min() < lo), bool(finite.size and finite.max() > hi)
+    if not finite.size:  # no value: no scale to read (a 0..1 bar would suggest one)
+        ax.text(0.5, 0.5, "no finite value", transform=ax.transAxes, ha="center", va="center", color="white")
+        return fig
+    below, above = bool(finite.min() < lo), bool(finite.max() > hi)
     extend = "both" if below and above else "min" if below else "max" if above else "neither"
     fig.colorbar(im, ax=ax, label=unit, shrink=0.85, extend=extend)
     return fig

@@ -106,6 +106,7 @@ from .pipelines import (
     _ORDER_CHECK_MIN_POINTS,
     _DISPLACEMENT_WARNING,
     EdgeDepth,
+    _depth_bearing_mask,
     _median_displacement,
     _void_points,
     dynamic_stereo,
@@ -149,6 +150,18 @@ VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".m
 
 def _natural_key(path: Path):
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
+
+
+_NO_EDGE_POINTS = "no edge points: "
+# the edge rules' hints name options of the pipelines; a video run's own words
+_NO_EDGE_HINTS = (
+    ("(raise max_corner_ratio to keep some)", "(a texture of blobs rather than edges: dense=True / --dense measures it)"),
+    ("within border_px of the border", "within 2.5 sigma_px of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)"),
+)
+
+
+#: A video file that decodes fewer than this share of the frames its container declares is reported (a truncated file).
+_DECODED_SHARE = 0.9
 
 
 class FrameSource:
@@ -195,6 +208,14 @@ class FrameSource:
                 yield frame.astype(np.float32, copy=False)
             if count == 0:
                 raise ImageReadError(f"cannot read video '{self.video}': no frames could be decoded")
+            declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+            if declared - count >= 2 and count < _DECODED_SHARE * declared:  # (containers that estimate the count err by less)
+                warnings.warn(
+                    f"video '{self.video}' declares {declared} frames, but only the first {count} could be decoded "
+                    "(a truncated or damaged file?): the results end there",
+                    UserWarning,
+                    stacklevel=2,
+                )
         finally:
             cap.release()
 
@@ -855,6 +876,9 @@ def depth_from_video(
     rounded: list[int] = []  # static frames whose step is not zero but lost to rounding
     largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
+    dense_behind_frames: list[int] = []  # frames whose dense map lies mostly behind the camera
+    no_edge_frames: list[int] = []  # frames with no edge point, and why (one warning per run)
+    no_edge_reasons: list[str] = []
     fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
     blind_frames: list[int] = []  # frames of which the turned outer frames see less than half
     seen = 1.0  # the least of it
@@ -920,7 +944,8 @@ def depth_from_video(
         dense_maps = (np.full(shape, np.nan, np.float32), np.full(shape, np.nan, np.float32)) if dense else (None, None)
         blank = [i for i, one in zip((k - 1, k, k + 1), blanks) if one]
         if moves and not blank:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(record=True) as heard:
+                warnings.simplefilter("always")  # (heard, then passed on below: "no edge points" once per run)
                 warnings.filterwarnings("ignore", message=_BEHIND_WARNING, category=UserWarning)
                 warnings.filterwarnings("ignore", message=_DISPLACEMENT_WARNING, category=UserWarning)  # one summary per run, below
                 # the noise of the frames as taken (turning or warping resamples the outer ones and hides part of it)
@@ -945,7 +970,15 @@ def depth_from_video(
                         edge_step_px=edge_step_px,
                         **edge_options,
                     )
-            mask = res.selection.mask
+            for heard_one in heard:
+                text = str(heard_one.message)
+                if text.startswith(_NO_EDGE_POINTS):
+                    no_edge_frames.append(k)
+                    no_edge_reasons.append(text)
+                else:
+                    warnings.warn(heard_one.message, stacklevel=2)
+            # the points that carry a depth: edges along the motion do not move and would hide a motion beyond range
+            mask = _depth_bearing_mask(res, res.selection.mask.shape)
             if whole is not None:
                 _void_points(res, ~whole, Reason.NO_DATA)  # a turned outer frame had nothing to read there
                 if whole.mean() < _LEAST_SEEN:
@@ -1004,6 +1037,10 @@ def depth_from_video(
                 to_float32_map(known, what="an inverse depth", hint=_UNITS_HINT)
                 to_float32_map(1.0 / known, what="a depth", hint=_UNITS_HINT)
                 dense_maps = (dt.rho.astype(np.float32), dt.rho_std.astype(np.float32))
+                with np.errstate(invalid="ignore"):
+                    behind, ahead = (int(np.count_nonzero(side * dt.rho > 2.0 * dt.rho_std)) for side in (-1.0, 1.0))
+                if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:  # beyond 2 std of 0: no far point's noise
+                    dense_behind_frames.append(k)
                 if dt.covered < _LEAST_SEEN:
                     ahead_frames.append(k)
                     covered = min(covered, dt.covered)
@@ -1129,6 +1166,24 @@ def depth_from_video(
             f" frames (up to {dense_frames_before + 2}; fewer at the start) lie up to {100 * bent:.0f} % of the mean step off the line through the first"
             f" and last of them: the dense maps take them as on that line ({_off_line_effect(bent, bent_ahead)});"
             " fewer frames (dense_frames_before) follow a curved path better",
+            UserWarning,
+            stacklevel=2,
+        )
+    if no_edge_frames:
+        reason = no_edge_reasons[0][len(_NO_EDGE_POINTS) :].removesuffix("; the result is empty")
+        for library, video in _NO_EDGE_HINTS:
+            reason = reason.replace(library, video.replace("dense=True / --dense measures it", "the dense maps measure it") if dense else video)
+        warnings.warn(
+            f"{_NO_EDGE_POINTS}in {len(no_edge_frames)} of {triples} frames ({_frame_list(no_edge_frames)}), e.g. frame {no_edge_frames[0]}: {reason}"
+            + ("" if dense else "; those frames have no depth of their own"),
+            UserWarning,
+            stacklevel=2,
+        )
+    if dense_behind_frames and not behind_frames:  # (with edge points the warning below says it)
+        warnings.warn(
+            f"in {len(dense_behind_frames)} of {triples} frames ({_frame_list(dense_behind_frames)}) most of the dense map lies behind"
+            " the camera (a negative inverse depth beyond 2 std; no depth there): the camera moves opposite to its given positions;"
+            " check the sign of the poses' x, y, z (or of [video] velocity / positions) and that frames and poses are in the same order",
             UserWarning,
             stacklevel=2,
         )
