@@ -645,10 +645,12 @@ def _cli_cases(tmp: Path, v):
     holed = cv2.imread(v1, cv2.IMREAD_GRAYSCALE).astype(np.float32)
     holed[3:5, 2:7] = np.nan
     np.save(tmp / "holed.npy", holed)
+    np.save(tmp / "hot.npy", np.where(np.isfinite(holed), holed, 2e22).astype(np.float32))
     out = str(tmp / "o.pfm")
     return [
         # the library names only its index (views[1], frames[3]): the command line names the file
         ("view with NaN", ["stereo", v0, str(tmp / "holed.npy"), v2, "--out", out], 2, "view 'holed.npy' contains 10 non-finite (NaN or inf) pixel(s); expected finite intensities"),
+        ("view too bright", ["stereo", v0, str(tmp / "hot.npy"), v2, "--out", out], 2, "view '" + str(tmp / "hot.npy") + "' has intensities up to 2e+22, beyond 1e+15"),
         ("one view", ["stereo", v0, "--out", out], 2, "stereo needs at least 2 views"),
         ("focal zero", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "0", "--baseline", "1"], 2, "--focal-px must be a positive number, got 0"),
         ("focal negative", ["stereo", v0, v1, v2, "--out", out, "--focal-px", "-10", "--baseline", "1"], 2, "--focal-px must be a positive number, got -10"),

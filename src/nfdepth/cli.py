@@ -666,9 +666,11 @@ def _cmd_stereo(args) -> int:
                 views, reference=reference, positions=args.positions, axis=args.axis, edges_only=args.edges_only, **options
             )
     except ValueError as exc:
-        too_large = re.match(r"^views\[(\d+)\] (has \d+x\d+ px .*megapixels.*)$", str(exc))  # the library knows no files
-        if too_large and int(too_large.group(1)) < len(args.views):
-            raise CLIError(f"view '{args.views[int(too_large.group(1))]}' {too_large.group(2)}", EXIT_USAGE) from None
+        # the library knows no files: "views[1] has ..." (size, intensities) is told with the file's name
+        named = re.match(r"^(column_views|views)\[(\d+)\] (.*)$", str(exc), re.DOTALL)
+        files = (column if named and named.group(1) == "column_views" else args.views) if named else ()
+        if named and int(named.group(2)) < len(files):
+            raise CLIError(f"view '{files[int(named.group(2))]}' {named.group(3)}", EXIT_USAGE) from None
         if depth_range is None:
             raise _as_option(exc, "cost_step_px", "--cost-step-px") from None
         lo, hi = args.disparity_range
