@@ -346,6 +346,7 @@ class _Progress:
 
 def _video_output(args, CLIError):
     from .cli import EXIT_USAGE, EXIT_WRITE, _check_output
+    from .io import parent_folder_problem
 
     out = Path(args.out)
     if out.suffix.lower() == ".npz":
@@ -354,9 +355,8 @@ def _video_output(args, CLIError):
         raise CLIError(f"--out '{out}' must be a .npz file or a folder (no extension)", EXIT_USAGE)
     if out.exists() and not out.is_dir():
         raise CLIError(f"--out '{out}' exists and is not a folder", EXIT_WRITE)
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+    problem = parent_folder_problem(out)
+    if problem:
         raise CLIError(f"--out '{out}': {problem}", EXIT_WRITE)
     if out.is_dir() and not args.force:
         for pattern in ("depth_*.tif", "dense_depth_*.tif"):
@@ -464,6 +464,12 @@ def _cmd_video(args) -> int:
     return 0
 
 
+_NOISE_STD_HELP = (
+    "the images' noise std in grey levels, for the error bar (default: estimated from the images;"
+    " compressed video and JPEG hide most of it, which makes the error bar too narrow: give it here)"
+)
+
+
 def register(sub, CLIError) -> None:
     """Add the ``dynamic`` and ``video`` sub-commands to ``sub``."""
     global _CLIError
@@ -494,7 +500,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--ply", metavar="FILE", help="also write the edge points as a point cloud")
     p.add_argument("--csv", metavar="FILE", help="also write the points as CSV: row,col,depth,depth_std (sub-pixel positions)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 3)")
-    p.add_argument("--noise-std", type=float, metavar="GREY", help="the images' noise std in grey levels, for the error bar (default: estimated from the images; compressed video and JPEG hide most of it, which makes the error bar too narrow: give it here)")
+    p.add_argument("--noise-std", type=float, metavar="GREY", help=_NOISE_STD_HELP)
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=_cmd_dynamic)
 
@@ -506,7 +512,7 @@ def register(sub, CLIError) -> None:
     p.add_argument("--figure", metavar="PNG", help="also write figures with a colour bar of the last frame's fused depth (PNG) and std (PNG_std.png)")
     p.add_argument("--unit", help="with --figure: unit of depth for the colour bar (default: scene units)")
     p.add_argument("--sigma-px", type=float, help="Gaussian smoothing (px, default 2)")
-    p.add_argument("--noise-std", type=float, metavar="GREY", help="the images' noise std in grey levels, for the error bar (default: estimated from the images; compressed video and JPEG hide most of it, which makes the error bar too narrow: give it here)")
+    p.add_argument("--noise-std", type=float, metavar="GREY", help=_NOISE_STD_HELP)
     p.add_argument(
         "--levels",
         type=int,

@@ -393,6 +393,8 @@ def _check_not_input(out, inputs, what: str = "--out") -> None:
 
 def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--out", inputs=()) -> Path:
     """Validate an output path before any work is done (no partial results); never one of ``inputs``."""
+    from .io import parent_folder_problem
+
     out = Path(path)
     if exts and out.suffix.lower() not in exts:
         folder = "; it is a directory, expected a file path" if out.is_dir() else ""
@@ -403,9 +405,8 @@ def _check_output(path: str, *, force: bool, exts=_ARRAY_EXTS, what: str = "--ou
     if os.path.lexists(out) and not force:
         link = " (a link to a missing file)" if not out.exists() else ""
         raise CLIError(f"{what} '{out}' exists{link}; use --force to overwrite it", EXIT_WRITE)
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+    problem = parent_folder_problem(out)
+    if problem:
         raise CLIError(f"{what} '{out}': {problem}", EXIT_WRITE)
     return out
 
@@ -463,23 +464,17 @@ def _stereo_outputs(args, inputs) -> tuple[list, dict]:
     """``nfdepth stereo``'s output paths, checked before any work: ``[--out, --uncertainty, --fill-mask, --preview, --ply]`` (those given) and the figures."""
     from ._cli_rig import _distinct, figure_outputs
 
-    outputs = [_check_output(args.out, force=args.force, inputs=inputs)]
+    named = {"out": _check_output(args.out, force=args.force, inputs=inputs)}
     if args.fill_mask and not args.fill:
         raise CLIError("--fill-mask needs --fill")
     if args.fill and args.edges_only:
         raise CLIError("--fill fills the holes of the dense map: it does not go with --edges-only (a map filled from the edge points alone would be mostly guesses)")
-    if args.uncertainty:
-        outputs.append(_check_output(args.uncertainty, force=args.force, what="--uncertainty", inputs=inputs))
-    if args.fill_mask:
-        outputs.append(_check_output(args.fill_mask, force=args.force, what="--fill-mask", inputs=inputs))
-    if args.preview:
-        outputs.append(_check_output(args.preview, force=args.force, exts=(".png",), what="--preview", inputs=inputs))
-    if args.ply:
-        outputs.append(_check_output(args.ply, force=args.force, exts=(".ply",), what="--ply", inputs=inputs))
+    for key, exts in (("uncertainty", _ARRAY_EXTS), ("fill_mask", _ARRAY_EXTS), ("preview", (".png",)), ("ply", (".ply",))):
+        if getattr(args, key):
+            named[key] = _check_output(getattr(args, key), force=args.force, exts=exts, what="--" + key.replace("_", "-"), inputs=inputs)
     figures = figure_outputs(args, with_std=bool(args.uncertainty), inputs=inputs)
-    given = [key for key in ("out", "uncertainty", "fill_mask", "preview", "ply") if getattr(args, key)]
-    _distinct({**dict(zip(given, outputs)), **figures}, CLIError)
-    return outputs, figures
+    _distinct({**named, **figures}, CLIError)
+    return list(named.values()), figures
 
 
 def _write_stereo_maps(args, outputs, values, std, filled) -> int:

@@ -52,6 +52,7 @@ __all__ = [
     "LUMA_WEIGHTS",
     "read_image",
     "make_output_folder",
+    "parent_folder_problem",
     "require_extension",
     "to_float32_map",
     "to_grey",
@@ -322,8 +323,7 @@ def _decode_tiff(path: Path) -> np.ndarray:
             if len(pages) > 1:
                 raise _read_error(path, f"holds {len(pages)} images (pages); expected one image per file (save each view as its own file)")
             page = pages[0] if pages else tif.pages[0]
-            photometric = int(page.photometric)
-            arr = _tiff_colours(path, page, photometric)
+            arr = _tiff_colours(path, page)
     except ImageReadError:
         raise
     except Exception as exc:  # tifffile raises several types on broken files
@@ -343,13 +343,14 @@ def _decode_tiff(path: Path) -> np.ndarray:
 
 
 # TIFF photometric interpretations (TIFF 6.0, section 8 and 21-23)
-_MINISWHITE, _MINISBLACK, _RGB, _PALETTE, _SEPARATED, _YCBCR = 0, 1, 2, 3, 5, 6
+_MINISWHITE, _MINISBLACK, _RGB, _PALETTE, _YCBCR = 0, 1, 2, 3, 6
 _TIFF_JPEG = (6, 7)  # old- and new-style JPEG compression: the decoder returns RGB
 _PHOTOMETRIC_NAMES = {4: "a transparency mask", 5: "CMYK (separated)", 6: "YCbCr", 8: "CIELab", 9: "ICCLab", 10: "ITULab", 32803: "a colour filter array (raw)", 32844: "LogL", 32845: "LogLuv", 34892: "linear raw"}
 
 
-def _tiff_colours(path: Path, page, photometric: int) -> np.ndarray:
+def _tiff_colours(path: Path, page) -> np.ndarray:
     """A TIFF page's pixels in the colours :func:`read_image` expects (see :func:`_decode_tiff`)."""
+    photometric = int(page.photometric)
     jpeg_rgb = photometric == _YCBCR and int(page.compression) in _TIFF_JPEG
     if photometric not in (_MINISWHITE, _MINISBLACK, _RGB, _PALETTE) and not jpeg_rgb:
         kind = _PHOTOMETRIC_NAMES.get(photometric, f"photometric {photometric}")
@@ -359,7 +360,7 @@ def _tiff_colours(path: Path, page, photometric: int) -> np.ndarray:
         arr = np.moveaxis(arr, 0, -1)  # planar (C, H, W) -> (H, W, C)
     if photometric == _PALETTE:
         cmap = np.asarray(page.colormap)
-        if cmap is None or cmap.ndim != 2 or cmap.shape[0] != 3 or arr.ndim != 2 or not np.issubdtype(arr.dtype, np.integer):
+        if cmap.ndim != 2 or cmap.shape[0] != 3 or arr.ndim != 2 or not np.issubdtype(arr.dtype, np.integer):
             raise _read_error(path, "a palette TIFF without a usable colour map")
         if int(arr.max(initial=0)) >= cmap.shape[1]:
             raise _read_error(path, f"palette index {int(arr.max())} beyond its colour map of {cmap.shape[1]} entries")
@@ -515,6 +516,14 @@ def _kept_on_failure():
         COMPLETED_WRITES = saved
 
 
+def parent_folder_problem(path) -> str | None:
+    """Why ``path`` cannot be made in its folder (``"'f' is not a directory"``, ``"directory 'x' does not exist"``), or None."""
+    parent = Path(path).parent if str(Path(path).parent) else Path(".")
+    if parent.is_dir():
+        return None
+    return f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+
+
 def make_output_folder(path, *, parents: bool = False) -> Path:
     """The output folder ``path``, created if missing (its parent must exist, unless ``parents``: then made too).
 
@@ -526,9 +535,8 @@ def make_output_folder(path, *, parents: bool = False) -> Path:
     if not path.is_dir():
         if parents and path.parent != path and not path.parent.is_dir():
             make_output_folder(path.parent, parents=True)
-        parent = path.parent if str(path.parent) else Path(".")
-        if not parent.is_dir():
-            problem = f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
+        problem = parent_folder_problem(path)
+        if problem:
             raise OutputWriteError(f"cannot write '{path}': {problem}")
         try:
             path.mkdir()
@@ -828,7 +836,7 @@ def write_ply(path, points_xyz, *, colors=None, force: bool = False) -> Path:
         msg = f"points_xyz must have shape (N, 3), got shape {pts.shape}"
         raise ValueError(msg)
     keep = np.all(np.isfinite(pts), axis=1)
-    to_float32_map(pts[keep], what="a coordinate", hint="a .ply file stores float32: rescale the points (another unit)")
+    xyz = to_float32_map(pts[keep], what="a coordinate", hint="a .ply file stores float32: rescale the points (another unit)")
     fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
     col = None
     if colors is not None:
@@ -845,7 +853,7 @@ def write_ply(path, points_xyz, *, colors=None, force: bool = False) -> Path:
         fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
     n = int(keep.sum())
     rec = np.empty(n, dtype=np.dtype(fields))
-    rec["x"], rec["y"], rec["z"] = (pts[keep, i] for i in range(3))
+    rec["x"], rec["y"], rec["z"] = (xyz[:, i] for i in range(3))
     if col is not None:
         rec["red"], rec["green"], rec["blue"] = (col[keep, i] for i in range(3))
     lines = ["ply", "format binary_little_endian 1.0", "comment written by nfdepth", f"element vertex {n}"]

@@ -202,12 +202,15 @@ def _edge_result(
     )
 
 
+def _point_pixels(rows, cols, shape) -> tuple[np.ndarray, np.ndarray]:
+    """The pixel ``(row, col)`` indices of sub-pixel point positions, clipped to ``shape``."""
+    return (np.clip(np.floor(rows).astype(np.int64), 0, shape[0] - 1), np.clip(np.floor(cols).astype(np.int64), 0, shape[1] - 1))
+
+
 def _void_points(res: EdgeDepth, where: np.ndarray, reason: Reason, *, determinable_only: bool = False) -> None:
     """The edge points of ``res`` whose pixel lies in ``where`` (all, or the determinable ones) get ``reason`` and NaN, in place."""
     inv = res.inverse_depth
-    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, where.shape[0] - 1)
-    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, where.shape[1] - 1)
-    void = where[ii, jj]
+    void = where[_point_pixels(res.rows, res.cols, where.shape)]
     if determinable_only:
         void &= inv.reason == Reason.OK
     inv.reason[void] = reason
@@ -241,7 +244,7 @@ def _warn_if_clipped_apart(frames, applied) -> None:
         )
 
 
-def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str, delta_vn=None, delta_vn_std=None) -> None:
+def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str, delta_vn, delta_vn_std) -> None:
     """Warn when most determinable points come out behind the camera (a sign mistake), or show no relative motion.
 
     A point whose relative normal flow ``delta_vn`` lies within 2 ``delta_vn_std``
@@ -253,19 +256,18 @@ def _warn_if_mostly_behind(inv: InverseDepth, order_hint: str, delta_vn=None, de
     behind = int(np.count_nonzero(reason == Reason.NOT_POSITIVE))
     ahead = int(np.count_nonzero(reason == Reason.OK))
     if behind + ahead >= _ORDER_CHECK_MIN_POINTS and behind > ahead:
-        if delta_vn is not None:
-            with np.errstate(invalid="ignore"):
-                still = np.abs(delta_vn) <= 2.0 * np.asarray(delta_vn_std)
-            idle = int(np.count_nonzero(still & (reason == Reason.NOT_POSITIVE)))
-            if idle > behind - idle:
-                warnings.warn(
-                    f"{behind} of {behind + ahead} determinable edge points have a negative inverse depth or none (given NaN with reason"
-                    f" NOT_POSITIVE), {idle} of them no relative motion at all (relative normal flow within 2 std of 0): do the images"
-                    " differ (not one image given twice), did the cameras move relative to each other as the rig says, is the scene within range?",
-                    UserWarning,
-                    stacklevel=3,
-                )
-                return
+        with np.errstate(invalid="ignore"):
+            still = np.abs(delta_vn) <= 2.0 * np.asarray(delta_vn_std)
+        idle = int(np.count_nonzero(still & (reason == Reason.NOT_POSITIVE)))
+        if idle > behind - idle:
+            warnings.warn(
+                f"{behind} of {behind + ahead} determinable edge points have a negative inverse depth or none (given NaN with reason"
+                f" NOT_POSITIVE), {idle} of them no relative motion at all (relative normal flow within 2 std of 0): do the images"
+                " differ (not one image given twice), did the cameras move relative to each other as the rig says, is the scene within range?",
+                UserWarning,
+                stacklevel=3,
+            )
+            return
         warnings.warn(
             f"{behind} of {behind + ahead} determinable edge points have a negative inverse depth "
             f"(behind the camera; given NaN with reason NOT_POSITIVE); {order_hint}",
@@ -291,8 +293,8 @@ def _median_displacement(mask, flow, span: float = 1.0) -> float:
     return float(np.median(shift)) if shift.size >= _ORDER_CHECK_MIN_POINTS else 0.0
 
 
-def _depth_bearing_mask(res: EdgeDepth, shape) -> np.ndarray:
-    """Image mask of the edge points of ``res`` that eq. 4 could solve (``OK``, ``NOT_POSITIVE`` or ``UNCERTAIN``).
+def _depth_bearing_mask(res: EdgeDepth) -> np.ndarray:
+    """Mask (the shape of ``res.selection.mask``) of the edge points of ``res`` that eq. 4 could solve (``OK``, ``NOT_POSITIVE`` or ``UNCERTAIN``).
 
     The edges parallel to the motion do not move: counted in, they hid a
     displacement beyond the stencil's range at the points that carry a depth
@@ -300,11 +302,9 @@ def _depth_bearing_mask(res: EdgeDepth, shape) -> np.ndarray:
     depth-bearing points, a median of 1.2 px over all edge points, no warning
     and depths 12-30 % off).
     """
-    mask = np.zeros(shape, bool)
+    mask = np.zeros(res.selection.mask.shape, bool)
     solved = np.isin(res.inverse_depth.reason, (Reason.OK, Reason.NOT_POSITIVE, Reason.UNCERTAIN))
-    ii = np.clip(np.floor(res.rows[solved]).astype(np.int64), 0, shape[0] - 1)
-    jj = np.clip(np.floor(res.cols[solved]).astype(np.int64), 0, shape[1] - 1)
-    mask[ii, jj] = True
+    mask[_point_pixels(res.rows[solved], res.cols[solved], mask.shape)] = True
     return mask
 
 
@@ -495,7 +495,7 @@ def dynamic_stereo(
             _void_points(result, apart, Reason.UNCERTAIN, determinable_only=True)
         result = replace(result, exposure=exposure)
     triples = [("moving camera's frames (I1, I3, I5)", vn_m, 2.0 * step), ("stationary camera's frames (I2, I3, I4)", vn_s, step)]
-    _warn_if_beyond_differential_range(_depth_bearing_mask(result, result.selection.mask.shape), triples)
+    _warn_if_beyond_differential_range(_depth_bearing_mask(result), triples)
     return result
 
 
@@ -624,7 +624,7 @@ def static_stereo_edges(
         max_rel_std=max_rel_std,
         order_hint="are the views in the wrong order? The camera must move toward `direction` from the first view to the last",
     )
-    _warn_if_beyond_differential_range(_depth_bearing_mask(result, result.selection.mask.shape), [("nearest views", flows[0], 1.0)])
+    _warn_if_beyond_differential_range(_depth_bearing_mask(result), [("nearest views", flows[0], 1.0)])
     return result
 
 

@@ -153,11 +153,15 @@ def _natural_key(path: Path):
 
 
 _NO_EDGE_POINTS = "no edge points: "
-# the edge rules' hints name options of the pipelines; a video run's own words
-_NO_EDGE_HINTS = (
-    ("(raise max_corner_ratio to keep some)", "(a texture of blobs rather than edges: dense=True / --dense measures it)"),
-    ("within border_px of the border", "within 2.5 sigma_px of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)"),
-)
+
+
+def _no_edge_hints(dense: bool) -> tuple:
+    """``(the edge rules' hint, a video run's own words)``: the hints name options of the pipelines that depth_from_video does not take."""
+    blobs = "the dense maps measure it" if dense else "dense=True / --dense measures it"
+    return (
+        ("(raise max_corner_ratio to keep some)", f"(a texture of blobs rather than edges: {blobs})"),
+        ("within border_px of the border", "within 2.5 sigma_px of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)"),
+    )
 
 
 #: A video file that decodes fewer than this share of the frames its container declares is reported (a truncated file).
@@ -877,8 +881,8 @@ def depth_from_video(
     largest = 0.0  # their largest coordinate
     behind_frames: list[int] = []
     dense_behind_frames: list[int] = []  # frames whose dense map lies mostly behind the camera
-    no_edge_frames: list[int] = []  # frames with no edge point, and why (one warning per run)
-    no_edge_reasons: list[str] = []
+    no_edge_frames: list[int] = []  # frames with no edge point (one warning per run)
+    no_edge_reason = ""  # why, in the first of them
     fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
     blind_frames: list[int] = []  # frames of which the turned outer frames see less than half
     seen = 1.0  # the least of it
@@ -973,12 +977,12 @@ def depth_from_video(
             for heard_one in heard:
                 text = str(heard_one.message)
                 if text.startswith(_NO_EDGE_POINTS):
+                    no_edge_reason = no_edge_reason or text
                     no_edge_frames.append(k)
-                    no_edge_reasons.append(text)
                 else:
                     warnings.warn(heard_one.message, stacklevel=2)
             # the points that carry a depth: edges along the motion do not move and would hide a motion beyond range
-            mask = _depth_bearing_mask(res, res.selection.mask.shape)
+            mask = _depth_bearing_mask(res)
             if whole is not None:
                 _void_points(res, ~whole, Reason.NO_DATA)  # a turned outer frame had nothing to read there
                 if whole.mean() < _LEAST_SEEN:
@@ -1091,8 +1095,8 @@ def depth_from_video(
         else ""
     )
     if not triples:  # (the command line refuses such a source before; a library caller gets no silent nothing)
-        seen = len(window)
-        msg = f"depth_from_video needs at least 3 frames, got {seen}" + ("" if seen else " (an empty iterable; a video file or folder: pass read_video(path))")
+        got = len(window)
+        msg = f"depth_from_video needs at least 3 frames, got {got}" + ("" if got else " (an empty iterable; a video file or folder: pass read_video(path))")
         raise ValueError(msg)
     if triples and not moved:
         raise ValueError(
@@ -1170,9 +1174,9 @@ def depth_from_video(
             stacklevel=2,
         )
     if no_edge_frames:
-        reason = no_edge_reasons[0][len(_NO_EDGE_POINTS) :].removesuffix("; the result is empty")
-        for library, video in _NO_EDGE_HINTS:
-            reason = reason.replace(library, video.replace("dense=True / --dense measures it", "the dense maps measure it") if dense else video)
+        reason = no_edge_reason[len(_NO_EDGE_POINTS) :].removesuffix("; the result is empty")
+        for library, video in _no_edge_hints(dense):
+            reason = reason.replace(library, video)
         warnings.warn(
             f"{_NO_EDGE_POINTS}in {len(no_edge_frames)} of {triples} frames ({_frame_list(no_edge_frames)}), e.g. frame {no_edge_frames[0]}: {reason}"
             + ("" if dense else "; those frames have no depth of their own"),
