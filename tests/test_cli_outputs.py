@@ -191,6 +191,8 @@ def test_float64_views_beyond_float32_say_so(tmp_path, capfd):
     assert code == 2
     assert "beyond the float32 range (max |value| 1e+300" in err and "non-finite" not in err
     assert f"cannot read image '{views[0]}': 600 pixel(s)" in err and len(err.strip().splitlines()) == 1
+    # the library's "or read it with dtype=float64 in Python" is no advice on the command line
+    assert err.endswith("float32 reaches 3.4e+38); rescale the intensities (to 0-255 or 0-1, say): nfdepth works in float32\n"), err
     assert not (tmp_path / "d.pfm").exists()
 
 

@@ -111,3 +111,31 @@ def test_dynamic_cli_takes_the_noise_std(tmp_path, capsys):
         code, _, err = run_cli(capsys, "dynamic", *paths, "--rig", PAPER_RIG, "--out", tmp_path / "x.pfm", "--noise-std", bad)
         assert code == 2 and err.startswith("nfdepth: error: --noise-std must be a positive number of grey levels, got")
     assert not (tmp_path / "x.pfm").exists()
+
+
+def test_a_sigma_that_leaves_no_edge_point_is_refused(tmp_path, capsys):
+    """sigma_px = 500 on 200 x 200 frames ran, then said 'within border_px of the border', an option dynamic stereo does not take.
+
+    Edge points are taken 2.5 sigma from the border (``ceil(2.5 sigma)`` px): 200 px frames have 199 cells, which keep one
+    cell for a border of at most 99 px, sigma_px 39.6.
+    """
+    scene = synthetic.paper_dynamic_sequence(1)
+    run = {"camera": scene.camera, "relative_motion": scene.relative_motion}
+    with pytest.raises(ValueError, match=r"^sigma_px = 39\.7 px leaves no edge point in images of 200x200 px: they are taken 2\.5 sigma_px \(100 px\) from the border, where the smoothing reaches past it; expected at most 39\.6 px$"):
+        nfdepth.dynamic_stereo(scene.frames, sigma_px=39.7, **run)
+    with pytest.warns(UserWarning, match="no edge points: all .* are corners"):  # the largest that fits runs (and smooths the pyramid away)
+        nfdepth.dynamic_stereo(scene.frames, sigma_px=39.6, **run)
+    with pytest.raises(ValueError, match=r"^sigma_px = 50 px leaves no edge point in images of 200x200 px"):
+        nfdepth.depth_from_video(scene.frames, camera=scene.camera, velocity=(1.0, 0.0, 0.0), sigma_px=50)
+    views = [np.tile(np.arange(20.0), (20, 1))] * 3
+    with pytest.raises(ValueError, match=r"^sigma_px = 4 px leaves no edge point in images of 20x20 px: .* \(10 px\) .*; expected at most 3\.6 px$"):
+        nfdepth.static_stereo_edges(views, camera=PinholeCamera(100.0, 20, 20), baseline=1.0, sigma_px=4)
+
+
+def test_no_edge_points_near_the_border_name_the_smoothing():
+    """An edge within 2.5 sigma of the border: the warning names sigma_px and the border in px, not border_px."""
+    cols = np.arange(60)
+    views = [np.tile(100 + 50 * np.tanh((cols - 3.5 - 0.3 * k) / 1.5), (60, 1)) for k in range(3)]
+    with pytest.warns(UserWarning, match=r"^no edge points: the 59 strong zero crossings in the reference image of shape \(60, 60\) all lie within 2\.5 sigma_px \(5 px\) of the border, where the smoothing reaches past it \(lower sigma_px / --sigma-px\); the result is empty$"):
+        res = nfdepth.static_stereo_edges(views, camera=PinholeCamera(100.0, 60, 60), baseline=1.0)
+    assert len(res) == 0

@@ -1146,3 +1146,87 @@ def test_a_dense_map_behind_the_camera_is_reported_without_edge_points():
     # naming max_corner_ratio, which depth_from_video does not take)
     none = [s for s in said if s.startswith("no edge points")]
     assert len(none) == 1 and none[0].startswith("no edge points: in 3 of 3 frames (1-3), e.g. frame 1: all ") and "max_corner_ratio" not in none[0], none
+
+
+# ------------------------------------------------------------------ checked at the call, not at the first frame
+
+
+def _untouched():
+    """Frames that fail the test if anything reads them."""
+    raise AssertionError("the frames were read before the arguments were checked")
+    yield  # pragma: no cover
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"stencil": "sobel"}, r"^stencil must be one of \('matched', 'simpson', 'paper'\), got 'sobel'$"),
+        ({"min_cos": 2.0}, r"^min_cos must be within \[0, 1\], got 2"),
+        ({"sigma_px": -1.0}, "sigma_px"),
+        ({"velocity": None}, "velocity"),
+    ],
+)
+def test_depth_from_video_checks_its_arguments_at_the_call(kwargs, match):
+    """Were checked at the first frame (a generator): a wrong stencil or min_cos only once a video had been opened and a triple read."""
+    options = {"camera": synthetic.paper_camera(), "velocity": STEP, **kwargs}
+    with pytest.raises((ValueError, TypeError), match=match):
+        depth_from_video(_untouched(), **options)
+
+
+def test_videos_library_checks_its_arguments_at_the_call():
+    from nfdepth.rig import load_rig
+    from nfdepth.video import dynamic_stereo_from_videos
+
+    rig = load_rig(PAPER_RIG)
+    for kwargs, error, match in [
+        ({"crossings": [1]}, ValueError, "frame 1 has no two frames before it"),
+        ({"crossings": [4], "shared": "left"}, ValueError, "shared must be one of"),
+        ({"crossings": [4], "sigma": 2.0}, TypeError, r"^unknown option 'sigma' for dynamic stereo: expected some of sigma_px, stencil, "),
+        ({"crossings": [4], "frame_interval": 2.0}, TypeError, r"^frame_interval comes from the rig \(\[motion\] frame_interval\), not from an option"),
+        ({"crossings": [4], "camera": synthetic.paper_camera()}, TypeError, r"^camera comes from the rig \(\[camera\]\)"),
+    ]:
+        with pytest.raises(error, match=match):
+            dynamic_stereo_from_videos(_untouched(), _untouched(), rig=rig, **kwargs)
+
+
+def test_rig_options_that_the_rig_gives_are_named():
+    """Was Python's 'got multiple values for keyword argument' from inside the library."""
+    from nfdepth.rig import dynamic_stereo_from_rig, load_rig
+
+    frames = list(synthetic.paper_dynamic_sequence(1).frames)
+    with pytest.raises(TypeError, match=r"^relative_motion comes from the rig \(\[motion\]\)"):
+        dynamic_stereo_from_rig(frames, load_rig(PAPER_RIG), relative_motion=None)
+    with pytest.raises(TypeError, match=r"^unknown options 'sigma', 'levels' for dynamic stereo"):
+        dynamic_stereo_from_rig(frames, load_rig(PAPER_RIG), sigma=2.0, levels=3)
+
+
+def test_video_cli_names_the_file_of_a_bad_frame(tmp_path, capsys, sequence_dir, rail_rig):
+    """Was 'frame 3 (60x50)' / 'frame 4 contains ... non-finite': which of a folder's files, the user had to count."""
+    assert cv2.imwrite(str(sequence_dir / "f3.png"), np.zeros((50, 60), np.uint8))
+    code, out, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "o.npz")
+    assert code == 2 and out == ""
+    assert err.strip().endswith(f"does not match frame 3 ('{sequence_dir / 'f3.png'}', 60x50)")
+    assert not (tmp_path / "o.npz").exists()
+    frame = cv2.imread(str(sequence_dir / "f4.png"), cv2.IMREAD_UNCHANGED).astype(np.float32)
+    frame[5, 5] = np.nan
+    (sequence_dir / "f3.png").unlink()
+    (sequence_dir / "f4.png").unlink()
+    assert cv2.imwrite(str(sequence_dir / "f4.tif"), frame)
+    code, _, err = run_cli(capsys, "video", sequence_dir, "--rig", rail_rig, "--out", tmp_path / "o.npz")
+    assert code == 2
+    assert err == f"nfdepth: error: frame 3 ('{sequence_dir / 'f4.tif'}') contains 1 non-finite (NaN or inf) pixel(s); expected finite intensities\n"
+
+
+def test_crossings_refusals_name_the_argument():
+    """Were a bare 'a non-empty list of frame indices ...' TypeError from the library."""
+    from nfdepth.rig import check_crossings
+    from nfdepth.video import dynamic_stereo_from_videos, interleaved_frames
+
+    with pytest.raises(TypeError, match=r"^crossings = \[4\.5\]: expected a non-empty list of frame indices \(integers >= 2\), strictly increasing$"):
+        dynamic_stereo_from_videos([], [], rig=load_rig(PAPER_RIG), crossings=[4.5])
+    with pytest.raises(TypeError, match=r"^crossings = '4': expected a non-empty list"):
+        dynamic_stereo_from_videos([], [], rig=load_rig(PAPER_RIG), crossings="4")
+    with pytest.raises(ValueError, match=r"^a non-empty list of frame indices \(integers >= 2\), strictly increasing$"):
+        check_crossings([5, 5])  # bare, for a caller that names the value (rig file, --crossings)
+    with pytest.raises(ValueError, match=r"^crossing must be an integer >= 2, got 1$"):
+        interleaved_frames([np.zeros((4, 4))] * 9, [np.zeros((4, 4))] * 9, 1)

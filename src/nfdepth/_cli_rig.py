@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import re
 import sys
 import time
 from pathlib import Path
@@ -367,7 +368,7 @@ def _video_output(args, CLIError):
 
 def _cmd_video(args) -> int:
     from .io import make_output_folder
-    from .rig import VideoSpec, load_poses, load_rig
+    from .rig import RigError, VideoSpec, load_poses, load_rig
     from .video import depth_from_video, read_video, write_video_frame, write_video_npz
 
     CLIError = _CLIError
@@ -439,6 +440,9 @@ def _cmd_video(args) -> int:
         progress.abort()
         if isinstance(exc, ValueError) and source_ended[0] and frames_seen[0] < 3:  # the library's own refusal, told with the file
             raise CLIError(f"video needs at least 3 frames, '{args.source}' gave {frames_seen[0]}") from None
+        named = _frame_named(str(exc), source) if isinstance(exc, (ValueError, RigError)) else None
+        if named is not None:  # the library knows no files: "frame 4 ..." is told with its file
+            raise CLIError(named) from None
         raise
     progress.close()
     if kind == "npz":
@@ -462,6 +466,26 @@ def _cmd_video(args) -> int:
         note = f", {len(empty)} of them without any (frame{'s' if len(empty) > 1 else ''} {listed})" + note
     print(f"depth for {written} frames (of {frames_seen[0]}; the first and last have no triple){note} -> {out}")
     return 0
+
+
+def _frame_named(message: str, source) -> str | None:
+    """The library's refusal of a frame (``as_image``'s "frame K ...", the size's "does not match frame K (...)") named by its file.
+
+    The frame's file in a folder of frames, or the video file; None for a message about no frame's pixels (a pose's frame, say).
+    """
+    found = re.match(r"(?:frame|.* does not match frame) (\d+)\b", message, re.DOTALL)
+    if found is None:
+        return None
+    k, rest = int(found.group(1)), message[found.end() :]
+    head = message[: found.start(1) - len("frame ")]
+    if source.paths is None:
+        return f"{head}frame {k} of '{source.video}'{rest}"
+    if k >= len(source.paths):
+        return None
+    said = re.match(r" \(([^()]*)\)", rest)  # "frame 3 (60x50)": one parenthesis, "frame 3 ('f3.png', 60x50)"
+    if said is not None:
+        return f"{head}frame {k} ('{source.paths[k]}', {said.group(1)}){rest[said.end() :]}"
+    return f"{head}frame {k} ('{source.paths[k]}'){rest}"
 
 
 _NOISE_STD_HELP = (

@@ -1031,6 +1031,8 @@ def _main(argv, debug: bool) -> int:
             text = f"cannot {'read' if code == EXIT_READ else 'write'} '{exc.filename}': {exc.strerror}"
         if getattr(exc, "path", None) is not None and type(exc).__name__ == "OutputExistsError":  # a file that appeared during the run
             text = f"'{exc.path}' exists; use --force to overwrite it"
+        if type(exc).__name__ == "ImageRangeError":  # no dtype to choose here: nfdepth works in float32
+            text = text.split(", or read it with dtype=")[0] + " (to 0-255 or 0-1, say): nfdepth works in float32"
         if code == EXIT_USAGE:
             text = _option_text(text, args)
         if code == EXIT_INTERNAL:

@@ -106,7 +106,7 @@ import numpy as np
 from ._quantile import percentile
 from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_scale_px, check_threshold
 from .edges import ROUNDING_GRADIENT, ROUNDING_LAPLACIAN, _block_read_back, _comparable_threshold, _corner_window_blocks
-from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, STENCILS
+from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, _check_stencil
 
 try:  # optional: the fused compiled kernels (numba); the numpy/OpenCV path otherwise
     from numba import njit as _njit
@@ -175,9 +175,7 @@ class _Params:
 def _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px):
     sigma_px = check_scale_px("sigma_px", sigma_px)
     frame_interval = check_frame_interval("frame_interval", frame_interval)
-    if stencil not in STENCILS:
-        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
-        raise ValueError(msg)
+    _check_stencil(stencil)
     if min_gradient is not None:
         min_gradient = check_threshold("min_gradient", min_gradient)
     relative_gradient = check_threshold("relative_gradient", relative_gradient)

@@ -62,6 +62,15 @@ __all__ = [
 
 STENCILS = ("matched", "simpson", "paper")
 
+
+def _check_stencil(stencil) -> str:
+    """``stencil`` if it names one of :data:`STENCILS`; ``ValueError`` saying which otherwise."""
+    if not isinstance(stencil, str) or stencil not in STENCILS:
+        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
+        raise ValueError(msg)
+    return stencil
+
+
 _TEMPORAL_WEIGHTS = {
     "paper": (1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0),
     "simpson": (1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0),
@@ -214,9 +223,7 @@ def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "m
     GradientField
         Gradients at cell centres ``(row + 0.5, col + 0.5)``, shape (H-1, W-1).
     """
-    if stencil not in STENCILS:
-        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
-        raise ValueError(msg)
+    _check_stencil(stencil)
     dt = check_frame_interval("frame_interval", frame_interval)
     if not isinstance(smoothed_frames, (list, tuple, np.ndarray)):
         msg = f"smoothed_frames must be a sequence of 2 or 3 2-D arrays, got {type(smoothed_frames).__name__}"
@@ -345,9 +352,7 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     exactly from the effective linear filters (Gaussian, then the stencil).
     ``n_frames``: 3 for a triple, 2 for the two-image variant.
     """
-    if stencil not in STENCILS:
-        msg = f"stencil must be one of {STENCILS}, got {stencil!r}"
-        raise ValueError(msg)
+    _check_stencil(stencil)
     if check_int("n_frames", n_frames, 2) not in (2, 3):
         msg = f"n_frames must be 2 (the two-image variant) or 3 (a triple), got {n_frames!r}"
         raise ValueError(msg)

@@ -166,7 +166,11 @@ def _edge_result(
     m = selection.mask
     if not m.any():
         warnings.warn(
-            f"{_no_edge_points_message(selection, f' in the reference image of shape {smoothed_middle.shape}')}; the result is empty",
+            _no_edge_points_message(selection, f" in the reference image of shape {smoothed_middle.shape}").replace(
+                "within border_px of the border",
+                f"within {BORDER_SIGMAS:g} sigma_px ({edge_options['border_px']} px) of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)",
+            )
+            + "; the result is empty",
             UserWarning,
             stacklevel=3,
         )
@@ -342,10 +346,28 @@ def _check_min_size(name: str, shape) -> None:
 BORDER_SIGMAS = 2.5
 
 
+def _border_px(sigma_px: float) -> int:
+    """How far from the border edge points are selected: :data:`BORDER_SIGMAS` sigma, at least 2 px."""
+    return max(2, math.ceil(BORDER_SIGMAS * sigma_px))
+
+
+def _check_sigma_fits(sigma_px: float, shape) -> None:
+    """Refuse a ``sigma_px`` whose border (:func:`_border_px`) leaves no cell of an image of ``shape`` for edge points."""
+    widest = (min(shape) - 2) // 2  # the cells, one fewer than the pixels, keep one inside 2 * border
+    border = _border_px(sigma_px)
+    if border > max(widest, 2):
+        msg = (
+            f"sigma_px = {sigma_px:g} px leaves no edge point in images of {shape[1]}x{shape[0]} px: they are taken "
+            f"{BORDER_SIGMAS:g} sigma_px ({border} px) from the border, where the smoothing reaches past it; expected at "
+            f"most {widest / BORDER_SIGMAS:.3g} px"
+        )
+        raise ValueError(msg)
+
+
 def _edge_options(min_gradient, max_corner_ratio, corner_window_px, sigma_px) -> dict:
     """Options of :func:`select_edge_points`; the corner window defaults to 2 sigma, the border to :data:`BORDER_SIGMAS` sigma (at least 2 px)."""
     window = corner_window_px if corner_window_px is not None else max(2.0 * sigma_px, 1.0)
-    border = max(2, math.ceil(BORDER_SIGMAS * sigma_px))
+    border = _border_px(sigma_px)
     return {"min_gradient": min_gradient, "max_corner_ratio": max_corner_ratio, "corner_window_px": window, "border_px": border}
 
 
@@ -393,6 +415,8 @@ def dynamic_stereo(
     sigma_px : float
         Gaussian smoothing (px). Below ``MIN_SIGMA_PX`` (1.5 px) a warning:
         the stencil's error on barely smoothed edges outgrows its error bar.
+        Edge points are taken ``BORDER_SIGMAS`` (2.5) sigma from the border:
+        a ``sigma_px`` that leaves none is refused.
     stencil : {"matched", "simpson", "paper"}
         Gradient stencil (:mod:`nfdepth.normal_flow`).
     min_gradient, max_corner_ratio, corner_window_px
@@ -441,6 +465,7 @@ def dynamic_stereo(
         )
         raise ValueError(msg)
     sigma_px = check_scale_px("sigma_px", sigma_px)
+    _check_sigma_fits(sigma_px, frames[0].shape)
     if sigma_px < MIN_SIGMA_PX:
         warnings.warn(
             f"sigma_px = {sigma_px:g} px smooths the images too little for the three-image stencil: its error on sharp edges"
@@ -584,6 +609,8 @@ def static_stereo_edges(
             msg = f"max_span must be >= 1, got {max_span!r}"
             raise ValueError(msg)
         span = min(span, int(max_span))
+    sigma_px = check_scale_px("sigma_px", sigma_px)
+    _check_sigma_fits(sigma_px, views[0].shape)
     noise = _noise_level(noise_std, views)
     s = [gaussian_smooth(v, sigma_px=sigma_px) for v in views]
     relative_motion = RigidMotion(translation=-baseline * direction)

@@ -41,6 +41,7 @@ value found and what was expected.
 from __future__ import annotations
 
 import csv
+import inspect
 import math
 import sys
 from dataclasses import dataclass, field
@@ -624,29 +625,36 @@ def _parse_motion(table) -> MotionSpec:
     return MotionSpec(velocity, rotation, interval, crossings)
 
 
-def check_crossings(crossings) -> tuple:
+def check_crossings(crossings, *, name: str | None = None) -> tuple:
     """Validate crossing instants: a non-empty list of frame indices >= 2, strictly increasing.
 
     Returns them as a tuple of int; raises ``ValueError`` (``TypeError`` for
-    non-integers) saying what was expected.
+    non-integers) saying what was expected, as ``"{name} = [...]: expected
+    ..."`` when ``name`` is given, else the bare ``"a non-empty list ..."``
+    for a caller that names the value itself.
     """
     expected = "a non-empty list of frame indices (integers >= 2), strictly increasing"
+
+    def refused(error, detail=""):
+        return error(expected + detail if name is None else f"{name} = {shown!r}: expected {expected}{detail}")
+
+    shown = crossings
     if isinstance(crossings, (str, bytes)) or not hasattr(crossings, "__iter__"):
-        raise TypeError(expected)
-    values = list(crossings)
+        raise refused(TypeError)
+    values = shown = list(crossings)
     if not values:
-        raise ValueError(expected)
+        raise refused(ValueError)
     out = []
     for v in values:
         if isinstance(v, (float, np.floating)) and float(v).is_integer():
             v = int(v)
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-            raise TypeError(expected)
+            raise refused(TypeError)
         out.append(int(v))
     if min(out) < 2:
-        raise ValueError(f"{expected}: frame {min(out)} has no two frames before it")
+        raise refused(ValueError, f": frame {min(out)} has no two frames before it")
     if any(b <= a for a, b in zip(out, out[1:])):
-        raise ValueError(expected)
+        raise refused(ValueError)
     return tuple(out)
 
 
@@ -896,17 +904,39 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
     }
 
 
+#: What a rig gives :func:`nfdepth.pipelines.dynamic_stereo`, and from which of its keys: no option of :func:`dynamic_stereo_from_rig`.
+_RIG_GIVEN = {"camera": "[camera]", "relative_motion": "[motion]", "frame_interval": "[motion] frame_interval"}
+
+
+def _check_dynamic_options(options) -> None:
+    """Refuse what ``options`` for :func:`~nfdepth.pipelines.dynamic_stereo` cannot hold beside a rig: what the rig gives, unknown names."""
+    from .pipelines import dynamic_stereo
+
+    for name in options:
+        if name in _RIG_GIVEN:
+            msg = f"{name} comes from the rig ({_RIG_GIVEN[name]}), not from an option: edit the rig file or give the rig object another one"
+            raise TypeError(msg)
+    takes = [p for p in inspect.signature(dynamic_stereo).parameters if p != "frames" and p not in _RIG_GIVEN]
+    unknown = [name for name in options if name not in takes]
+    if unknown:
+        msg = f"unknown option{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))} for dynamic stereo: expected some of {', '.join(takes)}"
+        raise TypeError(msg)
+
+
 def dynamic_stereo_from_rig(frames, rig: Rig, **options):
     """:func:`nfdepth.pipelines.dynamic_stereo` with the camera, relative motion and frame interval of ``rig``.
 
     ``frames`` are ``I1 .. I5`` (see :func:`nfdepth.pipelines.dynamic_stereo`);
     their size is checked against ``[camera]`` (:class:`RigError`), and its
     lens distortion undone first (:meth:`Rig.undistort`).
-    ``options`` go to :func:`~nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...).
+    ``options`` go to :func:`~nfdepth.pipelines.dynamic_stereo` (``sigma_px``, ...);
+    one the rig gives (``camera``, ``relative_motion``, ``frame_interval``) or
+    an unknown name is a ``TypeError`` that says so.
     This is the library form of ``nfdepth dynamic``.
     """
     from .pipelines import dynamic_stereo
 
+    _check_dynamic_options(options)
     frames = list(frames)
     if len(frames) != 5:
         raise ValueError(f"dynamic stereo needs exactly 5 images I1..I5, got {len(frames)}")

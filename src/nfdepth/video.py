@@ -93,26 +93,50 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._dense_video import MIN_SIDEWAYS_DEG, dense_row
-from ._exposure import clipped_apart, match_camera_exposure, match_frame_exposures
 from ._derotation import derotate, derotation_maps, measurable, moves_pixels
-from ._translating_pyramid import coarse_motion_px, edge_depth_coarse_to_fine, outer_reach
-from ._validate import UNIT_SCALE_RANGE, as_image, check_bool, check_int, check_noise_std, check_scale_px, check_threshold
+from ._exposure import clipped_apart, match_camera_exposure, match_frame_exposures
+from ._translating_pyramid import (
+    coarse_motion_px,
+    edge_depth_coarse_to_fine,
+    outer_reach,
+)
+from ._validate import (
+    UNIT_SCALE_RANGE,
+    as_image,
+    check_bool,
+    check_fraction,
+    check_int,
+    check_noise_std,
+    check_scale_px,
+    check_threshold,
+)
 from .camera import PinholeCamera
 from .depth import Reason
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
-from .normal_flow import estimate_noise_std
+from .normal_flow import _check_stencil, estimate_noise_std
 from .pipelines import (
     _DIFFERENTIAL_RANGE_PX,
-    _ORDER_CHECK_MIN_POINTS,
     _DISPLACEMENT_WARNING,
+    _ORDER_CHECK_MIN_POINTS,
     EdgeDepth,
+    _check_sigma_fits,
     _depth_bearing_mask,
     _median_displacement,
     _void_points,
     dynamic_stereo,
     static_stereo_edges,
 )
-from .rig import MAX_TURN_DEG, Rig, RigError, VideoSpec, _check_steps, check_crossings, dynamic_stereo_from_rig, edge_depth_maps
+from .rig import (
+    MAX_TURN_DEG,
+    Rig,
+    RigError,
+    VideoSpec,
+    _check_dynamic_options,
+    _check_steps,
+    check_crossings,
+    dynamic_stereo_from_rig,
+    edge_depth_maps,
+)
 from .stereo import auto_levels
 
 # FFmpeg logs a video it cannot open on stderr ("moov atom not found"), ahead of
@@ -155,13 +179,10 @@ def _natural_key(path: Path):
 _NO_EDGE_POINTS = "no edge points: "
 
 
-def _no_edge_hints(dense: bool) -> tuple:
-    """``(the edge rules' hint, a video run's own words)``: the hints name options of the pipelines that depth_from_video does not take."""
+def _no_edge_hint(dense: bool) -> tuple:
+    """``(the edge rules' hint, a video run's own words)``: the hint names an option of the pipelines that depth_from_video does not take."""
     blobs = "the dense maps measure it" if dense else "dense=True / --dense measures it"
-    return (
-        ("(raise max_corner_ratio to keep some)", f"(a texture of blobs rather than edges: {blobs})"),
-        ("within border_px of the border", "within 2.5 sigma_px of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)"),
-    )
+    return ("(raise max_corner_ratio to keep some)", f"(a texture of blobs rather than edges: {blobs})")
 
 
 #: A video file that decodes fewer than this share of the frames its container declares is reported (a truncated file).
@@ -804,7 +825,10 @@ def depth_from_video(
     Raises
     ------
     RigError, ValueError
-        Size mismatch with the rig's camera, no motion given,
+        At the call (the frames are not read yet): an option out of range,
+        a ``sigma_px`` that leaves no edge point (2.5 sigma from the
+        border) in the camera's frames without ``dense``. Later: size
+        mismatch with the rig's camera, no motion given,
         ``orientations_rad`` without ``positions`` or of another shape,
         positions / poses that never change, a velocity or a step
         between positions outside 1e-30..1e30 per frame (the rig's speed
@@ -839,6 +863,11 @@ def depth_from_video(
         msg = "depth_from_video needs a camera: pass rig=... or camera=PinholeCamera(...)"
         raise TypeError(msg)
     sigma_px = check_scale_px("sigma_px", sigma_px)
+    dense = check_bool("dense", dense)
+    if not dense:  # (the dense maps have no such border)
+        _check_sigma_fits(sigma_px, cam.shape)
+    stencil = _check_stencil(stencil)
+    min_cos = check_fraction("min_cos", min_cos)
     process_noise = check_threshold("process_noise", process_noise)
     gate = check_threshold("gate", gate, positive=True)
     min_std_px = check_threshold("min_std_px", min_std_px, positive=True)
@@ -849,7 +878,6 @@ def depth_from_video(
     levels = _check_levels(levels, cam.shape)
     max_residual_px = check_threshold("max_residual_px", max_residual_px, positive=True)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)
-    dense = check_bool("dense", dense)
     match_exposure = check_bool("match_exposure", match_exposure)
     dense_frames_before = check_int("dense_frames_before", dense_frames_before, 1)
     if dense_frames_before > 1 and not dense:
@@ -863,7 +891,18 @@ def depth_from_video(
             f" {_DIFFERENTIAL_RANGE_PX:g} px of motion per frame left after warping (default 1)"
         )
         raise ValueError(msg)
+    return _video_depths(
+        frames, spec=spec, rig=rig, camera=camera, cam=cam, first=first, levels=levels, sigma_px=sigma_px, stencil=stencil, min_cos=min_cos,
+        noise_std=noise_std, process_noise=process_noise, gate=gate, min_std_px=min_std_px, max_age=max_age, max_residual_px=max_residual_px,
+        edge_step_px=edge_step_px, dense=dense, dense_frames_before=dense_frames_before, match_exposure=match_exposure, threads=threads,
+    )  # fmt: skip
 
+
+def _video_depths(
+    frames, *, spec, rig, camera, cam, first, levels, sigma_px, stencil, min_cos, noise_std, process_noise, gate, min_std_px, max_age,
+    max_residual_px, edge_step_px, dense, dense_frames_before, match_exposure, threads,
+) -> Iterator[VideoDepthFrame]:  # fmt: skip
+    """:func:`depth_from_video`'s frames, from its checked arguments (a generator: the checks run at the call, not at the first frame)."""
     motion_name = _spec_name(spec, rig)
     lo, hi = UNIT_SCALE_RANGE
     window: list[np.ndarray] = []
@@ -1175,8 +1214,7 @@ def depth_from_video(
         )
     if no_edge_frames:
         reason = no_edge_reason[len(_NO_EDGE_POINTS) :].removesuffix("; the result is empty")
-        for library, video in _no_edge_hints(dense):
-            reason = reason.replace(library, video)
+        reason = reason.replace(*_no_edge_hint(dense))
         warnings.warn(
             f"{_NO_EDGE_POINTS}in {len(no_edge_frames)} of {triples} frames ({_frame_list(no_edge_frames)}), e.g. frame {no_edge_frames[0]}: {reason}"
             + ("" if dense else "; those frames have no depth of their own"),
@@ -1362,7 +1400,7 @@ def interleaved_frames(moving, reference, crossing: int, *, shared: str = "mean"
         expects.
     """
     shared = _check_shared(shared)
-    (c,) = check_crossings([crossing])
+    c = check_int("crossing", crossing, 2)  # (two frames before it)
     n = min(len(moving), len(reference))
     if c + 2 >= n:
         msg = f"crossing {c} needs frames {c - 2}..{c + 2}, but the videos have {n} frames (0..{n - 1})"
@@ -1440,7 +1478,10 @@ def dynamic_stereo_from_videos(
     Raises
     ------
     RigError
-        No ``[motion]``, no crossings, a frame size that differs from ``[camera]``.
+        No ``[motion]``, no crossings (at the call), a frame size that differs from ``[camera]``.
+    TypeError
+        At the call: an option :func:`nfdepth.pipelines.dynamic_stereo` does not
+        take, or one the rig gives (``camera``, ``relative_motion``, ``frame_interval``).
     ValueError
         A crossing the videos do not cover (too short).
 
@@ -1452,8 +1493,6 @@ def dynamic_stereo_from_videos(
         coincide at ``c`` (wrong crossing index, or the rig is not one this
         method fits) and the depths are biased.
     """
-    import warnings
-
     motion = rig._need("motion")
     shared = _check_shared(shared)
     match_exposure = check_bool("match_exposure", match_exposure)
@@ -1463,7 +1502,13 @@ def dynamic_stereo_from_videos(
             raise RigError(f"{where}: motion.crossings is missing and no crossings were given: expected the frame indices at which the cameras coincide")
         wanted = motion.crossings
     else:
-        wanted = check_crossings(crossings)
+        wanted = check_crossings(crossings, name="crossings")
+    _check_dynamic_options(options)
+    return _crossing_depths(moving, reference, rig=rig, wanted=wanted, shared=shared, match_exposure=match_exposure, options=options)
+
+
+def _crossing_depths(moving, reference, *, rig, wanted, shared, match_exposure, options) -> Iterator[CrossingDepth]:
+    """:func:`dynamic_stereo_from_videos`' crossings, from its checked arguments (a generator: the checks run at the call)."""
     pending = list(wanted)
     keep = 5
     m_win: list = []
