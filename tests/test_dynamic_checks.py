@@ -139,3 +139,41 @@ def test_no_edge_points_near_the_border_name_the_smoothing():
     with pytest.warns(UserWarning, match=r"^no edge points: the 59 strong zero crossings in the reference image of shape \(60, 60\) all lie within 2\.5 sigma_px \(5 px\) of the border, where the smoothing reaches past it \(lower sigma_px / --sigma-px\); the result is empty$"):
         res = nfdepth.static_stereo_edges(views, camera=PinholeCamera(100.0, 60, 60), baseline=1.0)
     assert len(res) == 0
+
+
+def test_poses_errors_count_comment_and_blank_lines(tmp_path):
+    """The lines were counted after comments and blank lines were dropped: every later line number was too small."""
+    from nfdepth.rig import RigError, load_poses
+
+    p = tmp_path / "poses.csv"
+    for text, match in [
+        ("frame,x,y,z\n# a comment\n\n0,a,0,0\n", r"^poses '.*' line 4: x = 'a': expected a finite number$"),
+        ("# head\nframe,x,y,z\n0,0,0,0\n# x\n2,1,0,0\n1,2,0,0\n", r"^poses '.*' line 6: frame indices must be strictly increasing$"),
+        ("\nframe,x,y,z,rx,ry,rz\n0,0,0,0,0,0,0\n\n1,0,0,0,0,0,2e6\n", r"^poses '.*' line 5: rx, ry, rz = \(0, 0, 2e\+06\)"),
+        ("\n# c\nfoo\n", r"^poses '.*' line 3: header 'foo'"),
+    ]:
+        p.write_text(text)
+        with pytest.raises(RigError, match=match):
+            load_poses(p)
+
+
+def test_rig_errors_are_nfdepth_errors():
+    from nfdepth._validate import NFDepthError
+    from nfdepth.rig import RigError
+
+    assert issubclass(RigError, NFDepthError) and issubclass(RigError, ValueError)
+
+
+def test_an_unquoted_glob_after_the_video_options_is_named(tmp_path, capsys):
+    """`--moving-video m/*.png`: the shell's files became the five-image arguments ('give either five images or ...')."""
+    files = []
+    for k in range(4):
+        files.append(tmp_path / f"m{k}.png")
+        assert cv2.imwrite(str(files[-1]), np.zeros((8, 8), np.uint8))
+    rig = Path(__file__).resolve().parents[1] / "examples" / "paper_pyramid_rig.toml"
+    code, out, err = run_cli(capsys, "dynamic", "--moving-video", *files, "--reference-video", tmp_path / "r.mp4", "--rig", rig, "--out", tmp_path / "o.npz")
+    assert code == 2 and out == ""
+    assert err == (
+        f"nfdepth: error: files {files[1]} {files[2]} {files[3]} beside --moving-video and --reference-video: "
+        "quote a glob such as 'frames/*.png', or the shell expands it into files\n"
+    )

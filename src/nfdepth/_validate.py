@@ -64,7 +64,7 @@ def check_frame_size(name: str, shape) -> None:
             digits += 1
         msg = (
             f"{name} has {shape[1]}x{shape[0]} px (width x height) = {pixels / 1e6:.{digits}f} megapixels, above the limit of "
-            f"{limit / 1e6:g} megapixels per frame (working memory is about 130-370 bytes per pixel); "
+            f"{limit / 1e6:g} megapixels per frame (working memory at such sizes is about 130-290 bytes per pixel: docs/troubleshooting.md); "
             f"downsample the images or raise the limit with the environment variable {MAX_PIXELS_ENV}"
         )
         raise ImageTooLargeError(msg)

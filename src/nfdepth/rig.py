@@ -54,6 +54,7 @@ import numpy as np
 from ._validate import (
     DISPARITY_OFFSET_EXPECTED,
     UNIT_SCALE_RANGE,
+    NFDepthError,
     check_disparity_offset,
 )
 from .camera import (
@@ -89,8 +90,8 @@ __all__ = [
 ]
 
 
-class RigError(ValueError):
-    """A rig description is missing a field, has a wrong value, or contradicts itself."""
+class RigError(NFDepthError):
+    """A rig description is missing a field, has a wrong value, or contradicts itself (a ``ValueError``)."""
 
 
 # ----------------------------------------------------------------- helpers
@@ -269,19 +270,21 @@ def load_poses(path) -> Poses:
         raise FileNotFoundError(f"cannot read poses file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
     try:
         with path.open(newline="", encoding="utf-8-sig") as fh:  # (-sig: Excel's "CSV UTF-8" opens with a byte-order mark)
-            rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+            reader = csv.reader(fh)  # each row with its line in the file (comment and blank lines count)
+            numbered = [(reader.line_num, r) for r in reader if r and not r[0].lstrip().startswith("#")]
     except UnicodeDecodeError:
         raise RigError(f"poses '{path}': not a UTF-8 text file") from None
     except OSError as exc:  # e.g. no read permission
         raise InputReadError(f"cannot read poses file '{path}': {exc.strerror or exc}") from None
-    if not rows:
+    if not numbered:
         raise RigError(f"poses '{path}': the file is empty; expected a header frame,x,y,z[,rx,ry,rz]")
-    header = [h.strip().lower() for h in rows[0]]
+    (header_line, header), *rows = numbered
+    header = [h.strip().lower() for h in header]
     if header not in (["frame", "x", "y", "z"], ["frame", "x", "y", "z", "rx", "ry", "rz"]):
-        raise RigError(f"poses '{path}' line 1: header {','.join(header)!r}: expected 'frame,x,y,z' or 'frame,x,y,z,rx,ry,rz'")
+        raise RigError(f"poses '{path}' line {header_line}: header {','.join(header)!r}: expected 'frame,x,y,z' or 'frame,x,y,z,rx,ry,rz'")
     n_cols = len(header)
     frames, values = [], []
-    for line_no, row in enumerate(rows[1:], start=2):
+    for line_no, row in rows:
         if len(row) != n_cols:
             raise RigError(f"poses '{path}' line {line_no}: {len(row)} columns: expected {n_cols} ({','.join(header)})")
         try:
@@ -305,7 +308,7 @@ def load_poses(path) -> Poses:
         raise RigError(f"poses '{path}': no data rows after the header")
     frames_arr = np.asarray(frames, dtype=np.int64)
     if np.any(np.diff(frames_arr) <= 0):
-        bad = int(np.argmax(np.diff(frames_arr) <= 0)) + 3
+        bad = rows[int(np.argmax(np.diff(frames_arr) <= 0)) + 1][0]
         raise RigError(f"poses '{path}' line {bad}: frame indices must be strictly increasing")
     arr = np.asarray(values, dtype=float)
     rot = arr[:, 3:6] if n_cols == 7 else np.zeros((arr.shape[0], 3))
@@ -313,7 +316,7 @@ def load_poses(path) -> Poses:
     if np.any(angles > MAX_TURN_DEG):
         bad = int(np.argmax(angles > MAX_TURN_DEG))
         raise RigError(
-            f"poses '{path}' line {bad + 2}: rx, ry, rz = {_point(rot[bad])}, a turn of {angles[bad]:g} degrees: expected at most"
+            f"poses '{path}' line {rows[bad][0]}: rx, ry, rz = {_point(rot[bad])}, a turn of {angles[bad]:g} degrees: expected at most"
             f" {MAX_TURN_DEG:g} (give the orientation modulo 360 degrees: beyond that float64 loses its fractions of a degree)"
         )
     return Poses(frames_arr, arr[:, :3], rot, source=path)

@@ -1543,7 +1543,10 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
             f"-{'col' if axis == 'x' else 'row'} from the first view to the last (the camera moving toward +X / +Y)"
         )
     if given:
-        return f"{where}: the scene may lie outside the given range (its matches beyond it are UNCERTAIN: widen the range), or the views are not rectified along the baseline"
+        return (
+            f"{where}: the scene may lie outside the given range (its matches beyond it are UNCERTAIN: widen the range), or the views"
+            " are in the wrong order or not rectified along the baseline"
+        )
     return f"{where}: the scene may lie outside that range (give disparity_range_px / --disparity-range, or the depths: --depth-range), or the views are not rectified along the baseline"
 
 
