@@ -1,5 +1,6 @@
 """Static stereo with x and y baselines together (nfdepth.xy_stereo)."""
 
+import re
 import warnings
 
 import numpy as np
@@ -347,9 +348,12 @@ def test_cli_column_positions_from_the_rig(cross_files, tmp_path, capsys):
     code = main(["stereo", *row, "--column", *col, "--rig", str(rig), "--edges-only", "--out", str(out)])
     _, err = capsys.readouterr()
     assert code == 0, err
-    lib = static_stereo_xy(
-        [read_image(p) for p in row], [read_image(p) for p in col], row_reference=1, column_reference=1, column_positions=[0.0, 1.0, 2.5], edges_only=True
-    )
+    # the column's views lie at 0, 1, 2: 2.5 does not fit them, and the run says so
+    assert re.search(r"warning: the views do not fit the positions given: paired with the reference view 1 alone, .* at view 0 1\.[12]\d, view 2 0\.[78]\d times", err), err
+    with pytest.warns(UserWarning, match="the views do not fit the positions given"):
+        lib = static_stereo_xy(
+            [read_image(p) for p in row], [read_image(p) for p in col], row_reference=1, column_reference=1, column_positions=[0.0, 1.0, 2.5], edges_only=True
+        )
     np.testing.assert_array_equal(read_pfm(out), lib.depth(focal_px=100.0, baseline=1.0).astype(np.float32))
     code = main(["stereo", *row, "--column", *col, "--column-positions", "0", "1", "2", "--rig", str(rig), "--out", str(tmp_path / "e.pfm")])
     _, err = capsys.readouterr()
