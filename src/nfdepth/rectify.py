@@ -346,9 +346,10 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         raise ValueError(msg)
     if np.max(off_line) > MAX_OFF_LINE * np.min(steps):
         worst = int(np.argmax(off_line))
+        line_name = "row" if axis == "x" else "column"  # (a line of cameras nearer the image's y axis is a column)
         warnings.warn(
-            f"camera {worst} is {off_line[worst]:.3g} scene units off the line through the row, {off_line[worst] / np.min(steps):.1%} of the "
-            f"smallest spacing of neighbouring views (at most {MAX_OFF_LINE:.0%} expected): its rectified view is misaligned across the row by "
+            f"camera {worst} is {off_line[worst]:.3g} scene units off the line through the {line_name}, {off_line[worst] / np.min(steps):.1%} of the "
+            f"smallest spacing of neighbouring views (at most {MAX_OFF_LINE:.0%} expected): its rectified view is misaligned across the {line_name} by "
             "that share of the disparity, which static stereo does not model",
             UserWarning,
             stacklevel=2,
@@ -763,7 +764,7 @@ def calibrated_grid_depth(
     """
     from ._validate import check_positive_or_inf
     from .depth import Reason
-    from .xy_stereo import fuse_axes
+    from .xy_stereo import _warn_if_axes_disagree, fuse_axes
 
     limit = check_positive_or_inf("max_line_disagreement_px", max_line_disagreement_px)
     row_cameras, column_cameras = list(row_cameras), list(column_cameras)
@@ -790,6 +791,7 @@ def calibrated_grid_depth(
         ok = np.isfinite(rho) & np.isfinite(rho_std) & (rho_std > 0)
         lines.append(SimpleNamespace(disparity=scale * rho, uncertainty=scale * rho_std, reason=np.where(ok, Reason.OK, Reason.NO_DATA).astype(np.uint8)))
     disparity, std, _reason, count, conflict = fuse_axes(*lines, max_axis_disagreement_px=limit)
+    _warn_if_axes_disagree(*lines, count == 2, conflict, positions="the cameras' positions of the row and of the column, --cameras / --column-cameras")
     with np.errstate(divide="ignore", invalid="ignore"):
         depth = scale / disparity.astype(np.float64)
         depth_std = scale * std.astype(np.float64) / disparity.astype(np.float64) ** 2

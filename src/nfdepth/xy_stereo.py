@@ -95,29 +95,38 @@ def _merged_reason(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 #: The row and the column measure one scene per unit of position: where the column's disparities are a median of
-#: more than this factor above or below the row's (at the pixels both measure, of at least _AXES_MIN_BOTH), a
-#: warning says so (positions in two units, or misstated). Measured with the spacing right: the bundled pyramid's
-#: row and column 1.000, Art's row with a column made from view 1 warped by the truth 1.00; misstated by a factor
-#: of 2 either way 0.50 / 1.99 (the fused map had kept 7.8-16 % of Art's pixels, without a word).
-_AXES_SCALE = 1.15
+#: more than this factor above or below the row's (at the pixels both measure, of at least _AXES_MIN_BOTH), or where
+#: more than _AXES_CONFLICT_SHARE of those pixels are refused for disagreeing, a warning says so (positions in two
+#: units, or misstated). Measured with the spacing right: the bundled pyramid's row and column 1.000, Art's row with
+#: a column made from view 1 warped by the truth 1.00; misstated by a factor of 2 either way 0.50 / 1.99 (the fused
+#: map had kept 7.8-16 % of Art's pixels, without a word). A column spacing 5 % off biased the fused map by 2.6 %
+#: and one 10-14 % off left 0.5-0.6 % of it (the rest refused), both without a word at the factor of 1.15 this was.
+_AXES_SCALE = 1.04
+_AXES_CONFLICT_SHARE = 0.5
 _AXES_MIN_BOTH = 100
 
 
-def _warn_if_axes_disagree(row, column, both: np.ndarray, conflict: np.ndarray) -> None:
-    """Warn when the column's disparities are a median scale apart from the row's (positions in two units?)."""
+def _warn_if_axes_disagree(row, column, both: np.ndarray, conflict: np.ndarray, *, positions: str = "row_positions / column_positions, --positions / --column-positions") -> None:
+    """Warn when the column's disparities are a median scale apart from the row's, or mostly refused (positions in two units?).
+
+    ``both``: the pixels fused from both lines; ``conflict``: those both
+    lines measured but that were refused for disagreeing.
+    """
+    measured = both | conflict
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = column.disparity[both] / row.disparity[both]
-    ratio = ratio[np.isfinite(ratio) & (np.abs(row.disparity[both]) >= 0.25)]
+        ratio = column.disparity[measured] / row.disparity[measured]
+    ratio = ratio[np.isfinite(ratio) & (np.abs(row.disparity[measured]) >= 0.25)]
     if ratio.size < _AXES_MIN_BOTH:
         return
     scale = float(np.median(ratio))
-    if 1.0 / _AXES_SCALE <= scale <= _AXES_SCALE:
+    n = int(np.count_nonzero(measured))
+    refused = np.count_nonzero(conflict) / n
+    if 1.0 / _AXES_SCALE <= scale <= _AXES_SCALE and refused <= _AXES_CONFLICT_SHARE:
         return
-    n = int(np.count_nonzero(both))
     warnings.warn(
-        f"the column's disparities are a median {scale:.3g} times the row's at the {n} pixels both measure ({100.0 * np.count_nonzero(conflict) / n:.0f} %"
+        f"the column's disparities are a median {scale:.3g} times the row's at the {n} pixels both measure ({100.0 * refused:.0f} %"
         " refused for disagreeing, UNCERTAIN), where one scene gives both the same per unit of position; are both lines'"
-        " positions right, in one unit (row_positions / column_positions, --positions / --column-positions)?",
+        f" positions right, in one unit ({positions})?",
         UserWarning,
         stacklevel=3,
     )
