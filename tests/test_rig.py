@@ -544,3 +544,18 @@ def test_dynamic_cli_refused_before_any_work(tmp_path, capsys, paper_pngs):
         code, stdout, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", PAPER_RIG, *extra)
         assert (code, stdout, err) == (2, "", f"nfdepth: error: {line}\n"), extra
     assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_a_distortion_that_folds_the_image_is_refused():
+    """k1 = -15 at f = 100 px: r (1 + k1 r^2) stops growing at r = 1 / sqrt(3 * 15), 14.9 px from the principal point,
+    inside the 200 x 200 image (140.7 px to its corners); undistortion folded the image over (a helper's row: 11.6 %
+    covered, 74 % more than 5 % off, without a word). Models that keep growing across the image are taken."""
+    import copy
+
+    d = copy.deepcopy(BASE)
+    d["camera"]["distortion"] = [-15.0, 0.0, 0.0, 0.0]
+    with pytest.raises(RigError, match=r"^camera\.distortion = \[-15\.0, 0\.0, 0\.0, 0\.0\]: expected a lens model that maps the image one to one: its radial term turns back 15 px from the principal point, inside the image \(141 px to its farthest corner\)"):
+        rig_from_dict(d)
+    for ok in ([-0.3, 0.1, 0.0, 0.0], [0.2, 0.0, 0.001, -0.001, 0.0], [-0.1, 0.02, 0.0, 0.0, 0.0, 0.1, 0.01, 0.0]):
+        d["camera"]["distortion"] = ok
+        assert rig_from_dict(d).distortion == tuple(ok)

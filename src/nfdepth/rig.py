@@ -567,13 +567,39 @@ class Rig:
 # ----------------------------------------------------------------- parsing
 
 
-def _parse_distortion(table) -> tuple:
+def _parse_distortion(table, camera: PinholeCamera) -> tuple:
     if not isinstance(table, dict) or "distortion" not in table:
         return ()
     d = table["distortion"]
     if not isinstance(d, list) or len(d) not in (4, 5, 8) or not all(_is_number(v) and math.isfinite(v) for v in d):
         raise _fail("camera.distortion", d, "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]")
+    fold = _radial_fold_px(d, camera)
+    if fold is not None:
+        reach = _corner_radius_px(camera)
+        raise _fail(
+            "camera.distortion",
+            d,
+            f"a lens model that maps the image one to one: its radial term turns back {fold:.0f} px from the principal point,"
+            f" inside the image ({reach:.0f} px to its farthest corner), so undoing it would fold the image over (coefficients"
+            " from another image size or focal length, or a fit that did not converge?)",
+        )
     return tuple(float(v) for v in d)
+
+
+def _corner_radius_px(camera: PinholeCamera) -> float:
+    """Distance from the principal point to the image's farthest corner, px."""
+    return max(math.hypot(x - camera.cx_px, y - camera.cy_px) for x in (0.0, camera.width_px - 1.0) for y in (0.0, camera.height_px - 1.0))
+
+
+def _radial_fold_px(d, camera: PinholeCamera) -> float | None:
+    """Where OpenCV's radial model ``r (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)`` stops growing
+    within the image (px from the principal point), or None: a model that folds the image back on itself there."""
+    k = [float(v) for v in d] + [0.0] * (8 - len(d))
+    r = np.linspace(0.0, _corner_radius_px(camera) / camera.focal_px, 2049)
+    r2 = r * r
+    radial = (1.0 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]))) / (1.0 + r2 * (k[5] + r2 * (k[6] + r2 * k[7])))
+    grows = np.diff(r * radial) > 0
+    return None if grows.all() else float(r[int(np.argmin(grows))] * camera.focal_px)
 
 
 def _parse_camera(table) -> PinholeCamera:
@@ -763,9 +789,10 @@ def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
     if "camera" not in data:
         raise RigError("camera is missing: expected a [camera] table with focal_px, width_px, height_px")
     base = Path(base_dir) if base_dir is not None else None
+    camera = _parse_camera(data["camera"])
     return Rig(
-        camera=_parse_camera(data["camera"]),
-        distortion=_parse_distortion(data["camera"]),
+        camera=camera,
+        distortion=_parse_distortion(data["camera"], camera),
         motion=_parse_motion(data["motion"]) if "motion" in data else None,
         stereo=_parse_stereo(data["stereo"]) if "stereo" in data else None,
         video=_parse_video(data["video"], base) if "video" in data else None,
