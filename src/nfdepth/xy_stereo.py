@@ -231,7 +231,7 @@ def static_stereo_xy(
     start = time.perf_counter()
     clash = sorted(k for k in options if k in _PER_AXIS)
     if clash:
-        msg = f"{', '.join(clash)} belong to one axis: use row_views / column_views, row_reference / column_reference and row_positions / column_positions"
+        msg = f"{', '.join(clash)} {'belongs' if len(clash) == 1 else 'belong'} to one axis: use row_views / column_views, row_reference / column_reference and row_positions / column_positions"
         raise TypeError(msg)
     limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
     rows = as_frames("row_views", row_views, min_count=2, dtype=np.float32)
