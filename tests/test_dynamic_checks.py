@@ -174,6 +174,6 @@ def test_an_unquoted_glob_after_the_video_options_is_named(tmp_path, capsys):
     code, out, err = run_cli(capsys, "dynamic", "--moving-video", *files, "--reference-video", tmp_path / "r.mp4", "--rig", rig, "--out", tmp_path / "o.npz")
     assert code == 2 and out == ""
     assert err == (
-        f"nfdepth: error: files {files[1]} {files[2]} {files[3]} beside --moving-video and --reference-video: "
+        f"nfdepth: error: files beside --moving-video and --reference-video: {files[1]} {files[2]} {files[3]}: "
         "quote a glob such as 'frames/*.png', or the shell expands it into files\n"
     )

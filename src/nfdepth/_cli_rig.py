@@ -238,11 +238,9 @@ def _cmd_dynamic_videos(args) -> int:
         raise CLIError("two synchronised videos need both --moving-video and --reference-video")
     if args.images:
         if len(args.images) not in (1, 5) and all(Path(a).exists() for a in args.images):  # an unquoted glob after a video option
-            listed = " ".join(args.images[:3]) + (f" ... ({len(args.images)} files)" if len(args.images) > 3 else "")
-            raise CLIError(
-                f"files {listed} beside --moving-video and --reference-video: quote a glob such as 'frames/*.png',"
-                " or the shell expands it into files"
-            )
+            from .cli import _glob_advice
+
+            raise CLIError(f"files beside --moving-video and --reference-video: {_glob_advice(args.images)}")
         raise CLIError("give either five images or --moving-video and --reference-video, not both")
     for flag in ("uncertainty", "preview", "ply", "csv"):
         if getattr(args, flag):

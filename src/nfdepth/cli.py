@@ -142,9 +142,14 @@ class _Parser(argparse.ArgumentParser):
         if message.startswith(prefix):
             extra = message[len(prefix) :].split()
             if len(extra) > 1 and all(Path(a).exists() for a in extra):  # an unquoted glob, expanded by the shell
-                listed = " ".join(extra[:3]) + (f" ... ({len(extra)} files)" if len(extra) > 3 else "")
-                message = f"{prefix}{listed}: quote a glob such as 'frames/*.png', or the shell expands it into files"
+                message = f"{prefix}{_glob_advice(extra)}"
         raise CLIError(f"{self.prog}: {message}", EXIT_USAGE)
+
+
+def _glob_advice(files) -> str:
+    """``files`` (the first three) and the advice for a glob the shell expanded into them."""
+    listed = " ".join(files[:3]) + (f" ... ({len(files)} files)" if len(files) > 3 else "")
+    return f"{listed}: quote a glob such as 'frames/*.png', or the shell expands it into files"
 
 
 def _classify(exc: BaseException) -> int:
