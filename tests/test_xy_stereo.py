@@ -362,6 +362,7 @@ def test_cli_column_positions_from_the_rig(cross_files, tmp_path, capsys):
     printed, err = capsys.readouterr()
     assert code == 0, err
     assert "fused" not in printed
+    assert err == "nfdepth: warning: the rig file's column_positions are for a column of views, and no --column is given: the row is measured alone\n"
 
 
 def test_a_row_and_a_column_of_misstated_spacing_warn():

@@ -527,7 +527,13 @@ def _cmd_stereo(args) -> int:
         sections = {"cx_px": "[camera]", "cy_px": "[camera]", "disparity_offset_px": "[stereo]"}
         for key in ("focal_px", "baseline", "axis", "positions", "column_positions", "disparity_offset_px", "cx_px", "cy_px"):
             if key == "column_positions" and not args.column:
-                continue  # the rig's column is not in use
+                if opts.get(key) is not None:  # the rig's column is not in use: said, as a run that fuses nothing
+                    warnings.warn(
+                        "the rig file's column_positions are for a column of views, and no --column is given: the row is measured alone",
+                        UserWarning,
+                        stacklevel=2,
+                    )
+                continue
             given = getattr(args, key)
             if key == "axis" and given == "x":
                 given = None  # the parser's default: the rig decides
