@@ -788,3 +788,15 @@ def test_a_link_to_a_missing_file_counts_as_existing(tmp_path):
     assert info.value.path == link
     write_array(link, np.ones((2, 2)), force=True)
     assert not link.is_symlink() and read_pfm(link).shape == (2, 2)
+
+
+def test_colormap_png_limits_are_numbers(tmp_path):
+    """vmin='abc' was NumPy's 'could not convert string to float', vmin=True taken as 1.0."""
+    from nfdepth.io import write_colormap_png
+
+    for value, match in (("abc", r"^vmin must be a finite number, got 'abc' \(str, not a number\)$"), (True, r"^vmin must be a finite number, got True \(bool, not a number\)$")):
+        with pytest.raises(TypeError, match=match):
+            write_colormap_png(tmp_path / "m.png", np.ones((3, 3)), vmin=value)
+    with pytest.raises(ValueError, match=r"^vmax must be a finite number, got inf$"):
+        write_colormap_png(tmp_path / "m.png", np.ones((3, 3)), vmax=float("inf"))
+    assert not list(tmp_path.iterdir())

@@ -356,6 +356,9 @@ def test_bad_option_messages():
     views = _plane_views(1.0)
     cases = [
         ({"median_px": 2}, ValueError, r"^median_px must be 0, 1, 3 or 5, got 2$"),
+        # a float size passed the test and failed inside OpenCV ("Argument 'ksize' is required to be an integer")
+        ({"median_px": 3.0}, TypeError, r"^median_px must be 0, 1, 3 or 5, got 3\.0 \(float; give an int such as 3\)$"),
+        ({"cost_median_px": 5.0}, TypeError, r"^cost_median_px must be 0, 1, 3 or 5, got 5\.0 \(float; give an int such as 5\)$"),
         ({"aggregation": "box"}, ValueError, r"^aggregation must be 'guided' or 'gaussian', got 'box'$"),
         ({"positions": ["a", "b", "c"]}, TypeError, r"^positions must be 3 numbers, got \['a', 'b', 'c'\]$"),
     ]

@@ -210,8 +210,12 @@ class EdgeSelection:
     ----------
     mask : ndarray of bool, shape (H-1, W-1)
         Strong zero-crossing edge points that are not corners.
-    zero_crossing, strong, corner : ndarray of bool, shape (H-1, W-1)
+    zero_crossing, strong : ndarray of bool, shape (H-1, W-1)
         The individual rules.
+    corner : ndarray of bool, shape (H-1, W-1)
+        The corner rule where it decides: strong zero crossings whose
+        ``corner_ratio`` exceeds ``max_corner_ratio`` (the rule alone is
+        ``corner_ratio > max_corner_ratio``).
     min_gradient : float
         The gradient threshold used (intensity per pixel).
     corner_ratio : ndarray, shape (H-1, W-1)
@@ -239,7 +243,7 @@ def _no_edge_points_message(selection: EdgeSelection, where: str = "") -> str:
     if not strong.any():
         return (
             f"no edge points: the images are textureless (no zero crossing{where} reaches the gradient threshold "
-            f"{selection.min_gradient:.4g} nor float32 rounding's; lower min_gradient / relative_gradient if that is too high)"
+            f"{selection.min_gradient:.4g} nor float32 rounding's; lower min_gradient if that is too high)"
         )
     kept = strong & ~selection.corner
     if not kept.any():

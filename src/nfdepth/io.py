@@ -39,7 +39,7 @@ from typing import BinaryIO
 import cv2
 import numpy as np
 
-from ._validate import NFDepthError, check_bool, check_positive_finite, float_dtype
+from ._validate import NFDepthError, check_bool, check_finite, check_positive_finite, float_dtype
 
 __all__ = [
     "InputReadError",
@@ -404,8 +404,9 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
         in **R, G, B(, A)** order (OpenCV's BGR is undone).
     dtype : numpy dtype or None, keyword-only
         ``float32`` (default) or ``float64``; ``None`` keeps the stored
-        dtype (e.g. ``uint8`` for an 8-bit PNG) and, with ``grey=False``, the
-        stored values exactly.
+        dtype (e.g. ``uint8`` for an 8-bit grey PNG) and, with
+        ``grey=False``, the stored values exactly; colour converted to grey
+        comes back as float32 (the luma is not a whole number).
 
     Returns
     -------
@@ -789,13 +790,8 @@ def write_colormap_png(path, array, *, vmin=None, vmax=None, cmap: str = "turbo"
         msg = f"cmap must be a Matplotlib colour map name such as 'turbo', 'viridis' or 'gray', got {cmap!r}"
         raise ValueError(msg)
     finite = np.isfinite(arr)
-    lo = vmin if vmin is not None else (float(arr[finite].min()) if finite.any() else 0.0)
-    hi = vmax if vmax is not None else (float(arr[finite].max()) if finite.any() else 1.0)
-    for name, v in (("vmin", lo), ("vmax", hi)):
-        if not np.isfinite(float(v)):
-            msg = f"{name} must be a finite number, got {v!r}"
-            raise ValueError(msg)
-    lo, hi = float(lo), float(hi)
+    lo = check_finite("vmin", vmin) if vmin is not None else (float(arr[finite].min()) if finite.any() else 0.0)
+    hi = check_finite("vmax", vmax) if vmax is not None else (float(arr[finite].max()) if finite.any() else 1.0)
     if hi < lo:
         msg = f"vmax must be >= vmin, got vmin={lo!r}, vmax={hi!r}"
         raise ValueError(msg)

@@ -214,9 +214,10 @@ def gradients(smoothed_frames, *, frame_interval: float = 1.0, stencil: str = "m
     frame_interval : float
         Time between consecutive frames (> 0); ``I_t`` is per unit time.
     stencil : {"matched", "simpson", "paper"}
-        Three-frame stencil (module docstring). Two frames always use the
-        Horn-Schunck cube: both frames weighted equally, ``I_t`` at the
-        midpoint time.
+        Three-frame stencil (module docstring). Two frames use the
+        Horn-Schunck cube in time (both frames weighted equally, ``I_t`` at
+        the midpoint time); ``stencil`` still picks the spatial difference
+        (``matched``'s four-point one, the others' two-point one).
 
     Returns
     -------

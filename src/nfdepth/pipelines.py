@@ -421,13 +421,15 @@ def dynamic_stereo(
         Gradient stencil (:mod:`nfdepth.normal_flow`).
     min_gradient, max_corner_ratio, corner_window_px
         Edge-point rules (:func:`nfdepth.edges.select_edge_points`);
-        ``corner_window_px`` defaults to ``2 * sigma_px``: the
-        smoothing spreads a corner over about two sigma.
+        ``corner_window_px`` defaults to ``2 * sigma_px`` (at least 1 px):
+        the smoothing spreads a corner over about two sigma.
     min_cos, max_rel_std : float
         Determinability threshold and optional bound on the relative
         uncertainty of depth (:func:`nfdepth.depth.solve_inverse_depth`).
     noise_std : float, optional
         Image noise (grey levels); estimated from the frames when omitted.
+    dtype : numpy dtype
+        ``float32`` (default) or ``float64``: the arithmetic's precision.
     match_exposure : bool
         Map each image onto ``I3``'s exposure first where it differs
         (:func:`nfdepth._exposure.match_nearby_exposures`: two cameras, or
@@ -576,6 +578,11 @@ def static_stereo_edges(
         would carry that bias into the fused depth and an error bar blind
         to it (7 views at 0.75-1 px per step: median error 2.4-3.8 %, 6-11
         times the std, without this rule; 0.5-1.0 % and 0.75-0.9 with it).
+    sigma_px, stencil, min_gradient, max_corner_ratio, corner_window_px, min_cos, max_rel_std, noise_std, dtype
+        As for :func:`dynamic_stereo`, but ``sigma_px`` defaults to 2 px
+        (3 there) and ``max_corner_ratio`` to 0.05 as there; no exposure
+        matching (the views of a static row: :func:`nfdepth.static_stereo`
+        matches them).
 
     Returns
     -------

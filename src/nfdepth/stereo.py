@@ -1732,6 +1732,15 @@ def _search(lo, hi, *, ends, feats, t, ref, guide, radius, match, step_px, inter
     return d, margin, candidates, step, share, at_end, (_INTERLEAVED_BIAS_STEPS if interleave else _SUBSAMPLE_BIAS_STEPS) * step
 
 
+def _median_size(name: str, value) -> int:
+    """A median filter size: 0 or 1 (none), 3 or 5, as an int (``TypeError`` for a float such as 3.0, as for any count)."""
+    size = _as_int(name, value, "0, 1, 3 or 5")
+    if size not in (0, 1, 3, 5):
+        msg = f"{name} must be 0, 1, 3 or 5, got {value!r}"
+        raise ValueError(msg)
+    return size
+
+
 def _warn_identical_views(views):
     """Warn when two views are the same (textured) image: a file given twice sees no motion, i.e. disparity 0."""
     same = [(i, j) for i in range(len(views)) for j in range(i + 1, len(views)) if np.array_equal(views[i], views[j])]
@@ -1939,9 +1948,10 @@ def static_stereo(
         These, the thresholds and the ridges above are applied to float32
         maps: finite values up to 1e30 are accepted.
     edge_step_px : float
-        Depth step (px per unit position, dense field 2 px either side) above
-        which an edge point whose pixel looks like the far side is
-        ``UNCERTAIN`` (module docstring, step 4; 0: no test).
+        Depth step (px of shift in the view nearest the reference, as every
+        px option here; dense field 2 px either side) above which an edge
+        point whose pixel looks like the far side is ``UNCERTAIN`` (module
+        docstring, step 4; 0: no test).
     polish_radius : int
         Guided-filter radius of the differential polish.
     disparity_range_px : (float, float), optional
@@ -1950,7 +1960,7 @@ def static_stereo(
         the cost volume searches this range and 1 px beyond it at
         ``cost_step_px`` (coarser past 512 candidates, with a warning). It
         bounds the output: a best match more than half a step beyond it, or
-        a final value more than :data:`_BOUND_STEPS` steps beyond it, is
+        a final value more than 0.2 candidate steps (``_BOUND_STEPS``) beyond it, is
         ``UNCERTAIN`` (the scene lies outside the range; a warning says so
         when that is most of it). The coarse-to-fine pyramid is skipped
         (``levels`` is then 1). Clipped to the disparities that leave a pixel in a view; a
@@ -2007,14 +2017,12 @@ def static_stereo(
     select_window_px = check_scale_px("select_window_px", select_window_px, zero_ok=False)
     max_std_px = check_threshold("max_std_px", max_std_px, positive=True)
     if max_std_px < UNIT_SCALE_RANGE[0]:
-        msg = f"max_std_px = {max_std_px:g} px is below any measurable standard deviation: expected at least {UNIT_SCALE_RANGE[0]:g} px (default 0.5)"
+        msg = f"max_std_px = {max_std_px:g} px is below any measurable standard deviation: expected at least {UNIT_SCALE_RANGE[0]:g} px (default 1)"
         raise ValueError(msg)
     dense_reach_px = check_reach("dense_reach_px", dense_reach_px)
     max_edge_std_px = check_threshold("max_edge_std_px", max_edge_std_px, positive=True, inf_ok=True)
     max_edge_disagreement_px = check_threshold("max_edge_disagreement_px", max_edge_disagreement_px, positive=True, inf_ok=True)
-    if median_px not in (0, 1, 3, 5):
-        msg = f"median_px must be 0, 1, 3 or 5, got {median_px!r}"
-        raise ValueError(msg)
+    median_px = _median_size("median_px", median_px)
     view_schedule = check_bool("view_schedule", view_schedule)
     match_exposure = check_bool("match_exposure", match_exposure)
     edges_only = check_bool("edges_only", edges_only)
@@ -2046,9 +2054,7 @@ def static_stereo(
     cost_tau_g = check_threshold("cost_tau_g", cost_tau_g, positive=True)
     cost_alpha = check_fraction("cost_alpha", cost_alpha)
     cost_sigma_px = check_scale_px("cost_sigma_px", cost_sigma_px)
-    if cost_median_px not in (0, 1, 3, 5):
-        msg = f"cost_median_px must be 0, 1, 3 or 5, got {cost_median_px!r}"
-        raise ValueError(msg)
+    cost_median_px = _median_size("cost_median_px", cost_median_px)
     min_cost_margin = check_threshold("min_cost_margin", min_cost_margin)
     edge_cost_margin = check_threshold("edge_cost_margin", edge_cost_margin)
     edge_step_px = check_threshold("edge_step_px", edge_step_px)

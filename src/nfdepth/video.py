@@ -824,17 +824,21 @@ def depth_from_video(
 
     Raises
     ------
+    TypeError
+        At the call: no camera, no motion (none of ``rig``, ``velocity``,
+        ``positions``), an option of the wrong type.
     RigError, ValueError
-        At the call (the frames are not read yet): an option out of range,
-        a ``sigma_px`` that leaves no edge point (2.5 sigma from the
-        border) in the camera's frames without ``dense``. Later: size
-        mismatch with the rig's camera, no motion given,
+        At the call (the frames are not read yet): more than one motion,
         ``orientations_rad`` without ``positions`` or of another shape,
-        positions / poses that never change, a velocity or a step
-        between positions outside 1e-30..1e30 per frame (the rig's speed
-        range), or (at the end of the frames) no triple in which the camera
-        moves. A step of at most 4 float64 ulps of the positions' largest
-        coordinate is rounding noise: that triple does not move.
+        positions / poses that never change, a velocity outside
+        1e-30..1e30 per frame (the rig's speed range), an option out of
+        range, a ``sigma_px`` that leaves no edge point (2.5 sigma from the
+        border) in the camera's frames without ``dense``. While the frames
+        are read: a frame whose size differs from the camera's, one with
+        NaN, positions that run out or a step between them outside the
+        speed range, and (at the end of the frames) no triple in which the
+        camera moves. A step of at most 4 float64 ulps of the positions'
+        largest coordinate is rounding noise: that triple does not move.
 
     Warns
     -----

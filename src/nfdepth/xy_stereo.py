@@ -70,7 +70,9 @@ class XYStereoResult(StereoResult):
     measured each pixel (0, 1 or 2) and ``conflict`` the pixels where both
     did and disagreed (``Reason.UNCERTAIN``). ``runtime_s`` covers both
     axes and the fusion; ``noise_std`` is the row's; ``search_range_px``
-    spans both axes' search ranges.
+    spans both axes' search ranges. ``exposure`` is None: each axis's
+    exposures are its own (``row.exposure``, ``column.exposure``); ``axis``
+    is ``"x"``, so :meth:`filled` fills along the rows.
     """
 
     row: StereoResult | None = None
@@ -223,10 +225,13 @@ def static_stereo_xy(
 
     Raises
     ------
-    ValueError
-        The two reference views differ or have different shapes, an option
-        meant per axis is given in ``options``, or any check of
-        :func:`nfdepth.static_stereo` fails (the message says which axis).
+    TypeError
+        An option meant per axis (``views``, ``reference``, ``positions``,
+        ``axis``) is given in ``options``.
+    ValueError, TypeError
+        The two reference views differ or have different shapes, or any
+        check of :func:`nfdepth.static_stereo` fails (the message says
+        which axis).
     """
     start = time.perf_counter()
     clash = sorted(k for k in options if k in _PER_AXIS)
