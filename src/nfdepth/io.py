@@ -39,7 +39,13 @@ from typing import BinaryIO
 import cv2
 import numpy as np
 
-from ._validate import NFDepthError, check_bool, check_finite, check_positive_finite, float_dtype
+from ._validate import (
+    NFDepthError,
+    check_bool,
+    check_finite,
+    check_positive_finite,
+    float_dtype,
+)
 
 __all__ = [
     "InputReadError",
@@ -744,9 +750,9 @@ def write_array(path, array, *, force: bool = False) -> Path:
     if ext == ".npy":
         out = arr if arr.dtype == np.float64 else arr.astype(np.float32)
         return atomic_write(path, lambda fh: np.save(fh, out, allow_pickle=False), force=force)
-    import tifffile
-
     import io as _io
+
+    import tifffile
 
     buf = _io.BytesIO()  # tifffile wants a named file or a buffer, not an os.fdopen object
     tifffile.imwrite(buf, np.ascontiguousarray(_float32_payload(arr, ext)))
