@@ -107,3 +107,13 @@ def test_noise_free_images_keep_an_error_bar(name):
     assert np.all(std > 0)
     ratio = np.median(np.abs(res.result.depth[ok] - res.true_depth[ok]) / std)
     assert 0.67 / 2.0 < ratio < 0.67 * 2.0
+
+
+def test_experiment_noise_is_checked():
+    """noise_std='1' was "'>' not supported between instances of 'str' and 'int'"."""
+    from nfdepth.experiments import run_paper_experiment
+
+    with pytest.raises(TypeError, match=r"^noise_std must be a finite number >= 0, got '1' \(str, not a number\)$"):
+        run_paper_experiment("exp1", noise_std="1")
+    with pytest.raises(ValueError, match=r"^noise_std must be a finite number >= 0, got -1$"):
+        run_paper_experiment("exp1", noise_std=-1)

@@ -800,3 +800,13 @@ def test_colormap_png_limits_are_numbers(tmp_path):
     with pytest.raises(ValueError, match=r"^vmax must be a finite number, got inf$"):
         write_colormap_png(tmp_path / "m.png", np.ones((3, 3)), vmax=float("inf"))
     assert not list(tmp_path.iterdir())
+
+
+def test_point_cloud_principal_point_is_a_number():
+    """cx_px='a' was Python's 'could not convert string to float'."""
+    from nfdepth.io import depth_to_points
+
+    with pytest.raises(TypeError, match=r"^cx_px must be a finite number, got 'a' \(str, not a number\)$"):
+        depth_to_points(np.ones((4, 4)), focal_px=100.0, cx_px="a")
+    with pytest.raises(ValueError, match=r"^cy_px must be a finite number, got inf$"):
+        depth_to_points(np.ones((4, 4)), focal_px=100.0, cy_px=float("inf"))

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validate import check_nonnegative_finite
 from .camera import relative_normal_flow_coefficients
 from .depth import Reason
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
@@ -114,6 +115,7 @@ def run_paper_experiment(
     if name not in EXPERIMENTS:
         msg = f"experiment must be one of {EXPERIMENTS}, got {name!r}"
         raise ValueError(msg)
+    noise_std = check_nonnegative_finite("noise_std", noise_std)  # (the renders bound it: synthetic._check_noise)
     rng = np.random.default_rng(seed)
     sigma = DEFAULT_SIGMA_PX[name] if sigma_px is None else sigma_px
     known_noise = noise_std if noise_std > 0 else None

@@ -898,12 +898,8 @@ def depth_to_points(depth, *, focal_px, cx_px=None, cy_px=None, image=None):
     z = _as_map("depth", depth).astype(np.float64)
     f = check_positive_finite("focal_px", focal_px)
     h, w = z.shape
-    cx = (w - 1) / 2.0 if cx_px is None else float(cx_px)
-    cy = (h - 1) / 2.0 if cy_px is None else float(cy_px)
-    for name, v in (("cx_px", cx), ("cy_px", cy)):
-        if not np.isfinite(v):
-            msg = f"{name} must be a finite number, got {v!r}"
-            raise ValueError(msg)
+    cx = (w - 1) / 2.0 if cx_px is None else check_finite("cx_px", cx_px)
+    cy = (h - 1) / 2.0 if cy_px is None else check_finite("cy_px", cy_px)
     with np.errstate(invalid="ignore"):
         keep = np.isfinite(z) & (z > 0)
     rows, cols = np.nonzero(keep)
