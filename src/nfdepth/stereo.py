@@ -1568,10 +1568,11 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
 # The check of the positions against the views (:func:`_spacing_message`): each view paired with the reference
 # alone, searched at the coarsest pyramid level (sides of at least _SPACING_MIN_SIDE px) where the scene's median
 # disparity per unit of position is still _SPACING_MIN_SHIFT_PX, over at most _SPACING_CANDIDATES candidates
-# from -0.5 to 3 times the field's largest |disparity|; views whose medians differ by more than _SPACING_RATIO
-# (or in sign) do not fit their positions. Measured on every real row at full size (Middlebury 2005 seven views,
-# Teddy nine, Tsukuba five): the pairs' medians agree within 1.09; a view missing from a row of three (Books
-# views 3, 5, 6 as 0, 1, 2) gives 2.09, two views swapped opposite signs.
+# from -1.5 to 3 times the field's largest |disparity| (within half the width); views whose scales (per-pixel
+# ratios to the pairs' median, :func:`_pair_scales`) differ by more than _SPACING_RATIO (or in sign) do not fit
+# their positions. Measured on every real row at full size (Middlebury 2005 three and seven views, Teddy three
+# and nine, Tsukuba three and five): 0.968-1.015; a view missing from a row of three (Books views 3, 5, 6 as
+# 0, 1, 2) gives 1.34 and 0.66, two views swapped opposite signs.
 _SPACING_MIN_SIDE = 48
 _SPACING_MIN_SHIFT_PX = 2.0
 _SPACING_CANDIDATES = 32
@@ -1605,10 +1606,9 @@ def _pair_scales(pyramids, t, ref, d, *, spread, noise_floor, min_cost_margin, m
     small = [_coarsest(p, n) for p in pyramids]
     p1, p99 = percentiles(small[ref], [1, 99])
     guide = _guide(small[ref], p1, p99 - p1)
-    reach = max(abs(lo), abs(hi)) / scale
-    if not reach > 0:
-        return {}
-    textured = _textured(_match_features([small[ref]])[0], noise_floor * _PYRDOWN_NOISE**n)
+    reach = max(abs(lo), abs(hi)) / scale  # (> 0: at least the median's 2 px)
+    (ref_feats,) = _match_features([small[ref]])
+    textured = _textured(ref_feats, noise_floor * _PYRDOWN_NOISE**n)
     h, w = small[ref].shape
     field = cv2.resize(np.nan_to_num(d, nan=float(mid)), (w, h), interpolation=cv2.INTER_AREA) / np.float32(scale)
     cols = np.arange(w, dtype=np.float32)[None, :]
@@ -1623,7 +1623,7 @@ def _pair_scales(pyramids, t, ref, d, *, spread, noise_floor, min_cost_margin, m
         candidates = np.arange(bottom, top + step, step)
         source = cols - np.float32(t[k]) * field
         inside = (source >= _SPACING_RADIUS) & (source <= w - 1 - _SPACING_RADIUS)
-        feats = _match_features([small[ref], small[k]])
+        feats = [ref_feats, *_match_features([small[k]])]
         dk, c_best, c_second = best_disparity(feats, np.array([0.0, t[k]]), 0, candidates, guide, radius=_SPACING_RADIUS, **match)
         unique = inside & (_cost_margin(c_best, c_second, spread) >= min_cost_margin) & (dk > candidates[0] + step) & (dk < candidates[-1] - step)
         found[k] = dk
