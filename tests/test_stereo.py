@@ -290,6 +290,56 @@ def test_dense_uncertainty_covers_the_bundled_pyramid():
     assert np.mean(z < 3) > 0.95
 
 
+def _board_before_wall(noise_std=1.0):
+    """Three views of the textured board before a textured wall (1.7 and 2.5 px per view), the truth and a near-step mask."""
+    from textured_planes import textured_world_frame
+
+    from nfdepth.camera import PinholeCamera
+
+    camera = PinholeCamera(focal_px=100.0, width_px=160, height_px=120)
+    rng = np.random.default_rng(1)
+    shots = [textured_world_frame(camera, np.eye(3), (x, 0.0, 0.0), noise=noise_std, rng=rng) for x in (-1.0, 0.0, 1.0)]
+    truth = 100.0 / shots[1][1]  # f B / Z, B = 1
+    near = ndimage.binary_dilation(np.hypot(*np.gradient(truth)) > 0.2, iterations=9)  # within the 19 px cost window of the outline
+    return [s[0] for s in shots], truth, near
+
+
+@pytest.mark.parametrize("noise", [1.0, 2.0])
+def test_dense_uncertainty_covers_a_depth_step(noise):
+    """Near a depth step the cost window holds both surfaces and may hand a pixel the other one's disparity (the
+    board's outline fattened by up to the window's radius: 7.5 % of the pixels within 9 px of it off by more than
+    0.5 px). The window's information alone gave those pixels a std 4.3 (noise 2: 3.1) times too small (RMS error
+    over RMS std; 13 % beyond 3 std). The std now adds the field's spread about its plane in the window: RMS ratio
+    measured 1.21 (1.30) near the outline; 0.51 (0.73) away from it, where it was 0.58 (0.80) already."""
+    views, truth, near = _board_before_wall(noise)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="no edge points")
+        r = static_stereo(views, reference=1, noise_std=noise)
+    dense = np.isfinite(r.disparity) & ~r.edge_mask
+    error = np.abs(r.disparity - truth)
+    ratios = []
+    for part in (dense & near, dense & ~near):
+        assert part.sum() > 2000
+        ratios.append(np.sqrt(np.mean(error[part] ** 2) / np.mean(r.uncertainty[part] ** 2)))
+    assert 1 / 1.5 <= ratios[0] <= 1.5, ratios
+    assert 0.4 <= ratios[1] <= 1.5, ratios
+    # a term of the reported std: the test behind reason (max_std_px) keeps the window's noise
+    assert np.mean(np.isfinite(r.disparity)) > 0.95
+
+
+def test_window_plane_spread_is_zero_on_a_plane_and_a_quarter_step_squared_at_a_step():
+    from nfdepth.stereo import _window_plane_spread
+
+    rows, cols = np.mgrid[0:60, 0:80].astype(np.float32)
+    assert np.max(_window_plane_spread(3.0 + 0.2 * cols - 0.1 * rows, 4)[8:-8, 8:-8]) < 1e-5  # slant is no model error (float32 rounding: 0.003 px)
+    step = _window_plane_spread(np.where(cols < 40, 10.0, 14.0).astype(np.float32), 4)
+    # a 4 px step through a 9 x 9 window: variance 4 (the quarter step squared) less what the plane takes, 1.0-1.3 px^2
+    assert np.all((step[30, 36:44] > 0.9) & (step[30, 36:44] < 1.4))
+    assert np.all(step[30, :31] == 0.0) and np.all(step[30, 45:] == 0.0)  # beyond the window's reach
+    noise = np.random.default_rng(0).normal(0.0, 1.0, (200, 200)).astype(np.float32)
+    assert abs(np.mean(_window_plane_spread(noise, 4)[20:-20, 20:-20]) - (1.0 - 3.0 / 81.0)) < 0.02  # white noise: its variance less 3 fitted terms
+
+
 def test_invalid_where_there_is_no_texture():
     views = _plane_views(1.0)
     flat = [v.copy() for v in views]

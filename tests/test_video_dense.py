@@ -73,14 +73,16 @@ def _scores(result, depth):
     ],
 )
 def test_dense_depth_follows_the_truth(step, turn_deg, least_cover):
-    """Measured: cover 0.76-1.00, median 1.2-3.3 %, >10 % off 0.8-1.5 %, median |z| 0.56-0.93."""
+    """Measured: cover 0.76-1.00, median 0.4-1.2 %, >10 % off 0.8-1.4 %, median |z| 0.35-0.55. The std near the board's
+    outline holds the window's model error (``tests/test_stereo.py::test_dense_uncertainty_covers_a_depth_step``): the
+    RMS of errors that are either small or a whole step, so the median |z| there is 0.17-0.34 (0.42-0.67 before)."""
     frames, depths, positions, orientations = _film(step, turn_deg)
     (r,) = _dense(frames, positions, orientations)
     cover, median, wrong, z = _scores(r, depths[1])
     assert cover > least_cover
     assert median < 0.05
     assert wrong < 0.03
-    assert 0.4 < z < 1.35  # within a factor of 2 of 0.67
+    assert 0.3 < z < 1.35  # within a factor of 2.2 of 0.67 (the outline's two-valued errors, above)
     assert r.dense_depth.dtype == np.float32 and r.dense_depth_std.dtype == np.float32
 
 
@@ -117,12 +119,13 @@ def _sideways_triple_scores(along):
 def test_the_views_go_in_their_order_along_the_path(along):
     """A camera that reverses within its triple, pauses for a frame, or drops one: the views in their order along the path
     (the middle one at an end of the row, or two views). Measured: cover 0.99-1.00, median 0.28-0.63 %, >10 % off 0.8-1.3 %
-    (before the interleaved sub-sample fit: 0.65-3.2 %); before that, the first three gave NaN maps."""
+    (before the interleaved sub-sample fit: 0.65-3.2 %); before that, the first three gave NaN maps. Median |z| 0.37-0.51
+    (0.46-0.60 before the std held the window's model error near the board's outline)."""
     cover, median, wrong, z = _sideways_triple_scores(along)
     assert cover > 0.95
     assert median < 0.05
     assert wrong < 0.03
-    assert 0.4 < z < 1.35
+    assert 0.3 < z < 1.35
 
 
 @pytest.mark.parametrize(("near", "least_median"), [(-0.2, 0.006), (-0.5, 0.006)])
