@@ -230,11 +230,12 @@ class EdgeSelection:
     corner_ratio: np.ndarray
 
 
-def _no_edge_points_message(selection: EdgeSelection, where: str = "") -> str:
+def _no_edge_points_message(selection: EdgeSelection, where: str = "", *, border: str = "within border_px of the border") -> str:
     """Why ``selection`` holds no edge point, for a warning: the first rule that left none.
 
     Starts "no edge points: "; ``where`` (e.g. " in the reference image")
-    follows the rule's name.
+    follows the rule's name; ``border`` says where the border rule left them
+    (in the caller's options).
     """
     zero = selection.zero_crossing
     if not zero.any():
@@ -248,7 +249,7 @@ def _no_edge_points_message(selection: EdgeSelection, where: str = "") -> str:
     kept = strong & ~selection.corner
     if not kept.any():
         return f"no edge points: all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners (raise max_corner_ratio to keep some)"
-    return f"no edge points: the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie within border_px of the border"
+    return f"no edge points: the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie {border}"
 
 
 def _comparable_threshold(value: float, dtype) -> float:

@@ -45,6 +45,7 @@ from ._validate import (
     check_finite,
     check_positive_finite,
     float_dtype,
+    is_real_numeric,
 )
 
 __all__ = [
@@ -145,7 +146,7 @@ def to_grey(array, *, dtype=None) -> np.ndarray:
         If its shape is not one of the above.
     """
     arr = np.asarray(array)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_numeric(arr):
         msg = f"array must be a real numeric image, got dtype {arr.dtype}"
         raise TypeError(msg)
     if dtype is not None:
@@ -453,7 +454,7 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
     else:
         data = _read_bytes(path)
         arr = _decode_pfm(path, data) if ext == ".pfm" else _decode_cv2(path, data, ext)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_numeric(arr):
         raise _read_error(path, f"holds dtype {arr.dtype}, expected real numbers")
     if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] in (1, 2, 3, 4))):
         raise _read_error(path, f"holds an array of shape {arr.shape}, expected (H, W) or (H, W, C) with C in 1..4")
@@ -644,7 +645,7 @@ def require_extension(path, ext: str, *, hint: str = "") -> None:
 
 def _as_map(name: str, array, *, allow_colour: bool = False) -> np.ndarray:
     arr = np.asarray(array)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_numeric(arr):
         msg = f"{name} must be a real numeric array, got dtype {arr.dtype}"
         raise TypeError(msg)
     ok = arr.ndim == 2 or (allow_colour and arr.ndim == 3 and arr.shape[-1] == 3)
@@ -944,7 +945,7 @@ def to_rgb8(image) -> np.ndarray:
     ndarray, uint8, shape (H, W, 3)
     """
     arr = np.asarray(image)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_numeric(arr):
         msg = f"image must be a real numeric image, got dtype {arr.dtype}"
         raise TypeError(msg)
     if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[-1] in (1, 2, 3, 4))):

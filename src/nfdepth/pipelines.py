@@ -166,9 +166,10 @@ def _edge_result(
     m = selection.mask
     if not m.any():
         warnings.warn(
-            _no_edge_points_message(selection, f" in the reference image of shape {smoothed_middle.shape}").replace(
-                "within border_px of the border",
-                f"within {BORDER_SIGMAS:g} sigma_px ({edge_options['border_px']} px) of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)",
+            _no_edge_points_message(
+                selection,
+                f" in the reference image of shape {smoothed_middle.shape}",
+                border=f"within {BORDER_SIGMAS:g} sigma_px ({edge_options['border_px']} px) of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)",
             )
             + "; the result is empty",
             UserWarning,
