@@ -127,8 +127,14 @@ def test_bad_rows_are_refused():
     views, _ = render(cams)
     with pytest.raises(ValueError, match="at least 2 views and one camera per view, got 3 views and 2 cameras"):
         rectify_row(views, cams[:2], reference=1)
-    with pytest.raises(ValueError, match=r"reference must be an integer index of the views, 0..2, got 3"):
+    with pytest.raises(ValueError, match=r"reference must be a view index in 0..2, got 3"):
         rectify_row(views, cams, reference=3)
+    # a wrong type is a TypeError, as in static_stereo
+    with pytest.raises(TypeError, match=r"reference must be an int view index, got 1.0 \(float; give an int such as 1\)"):
+        rectify_row(views, cams, reference=1.0)
+    for not_a_list in (None, cams[0], 3):
+        with pytest.raises(TypeError, match=r"^cameras must be a sequence of CalibratedCamera, one per view, got "):
+            rectify_row(views, not_a_list, reference=1)
     with pytest.raises(ValueError, match=r"views\[1\] is 179x120 px"):
         rectify_row([views[0], views[1][:, :-1], views[2]], cams, reference=1)
     with pytest.raises(TypeError, match=r"cameras\[0\] must be a CalibratedCamera, got dict"):
@@ -432,6 +438,12 @@ def test_a_row_and_a_column_fused():
         calibrated_grid_depth(rv, rc, cv, [cc[0], cc[2], cc[1]], row_reference=1, column_reference=1)
     with pytest.raises(ValueError, match="reference views must be the same image"):
         calibrated_grid_depth(rv, rc, [cv[0], cv[1] + 1.0, cv[2]], cc, row_reference=1, column_reference=1)
+    with pytest.raises(ValueError, match=r"column_reference must be a view index in 0..2, got 3"):
+        calibrated_grid_depth(rv, rc, cv, cc, row_reference=1, column_reference=3)
+    with pytest.raises(TypeError, match=r"row_reference must be an int view index, got True"):
+        calibrated_grid_depth(rv, rc, cv, cc, row_reference=True, column_reference=1)
+    with pytest.raises(TypeError, match=r"column_cameras must be a sequence of CalibratedCamera, one per view, got NoneType"):
+        calibrated_grid_depth(rv, rc, cv, None, row_reference=1, column_reference=1)
 
 
 def test_cli_stereo_with_cameras_and_a_column(capfd, tmp_path):

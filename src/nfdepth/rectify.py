@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 
@@ -44,7 +45,12 @@ import cv2
 import numpy as np
 
 from ._derotation import derotate, grid_rays, turn_rays
-from ._validate import as_vector3, check_image_size
+from ._validate import (
+    as_vector3,
+    check_image_size,
+    check_positive_or_inf,
+    check_view_index,
+)
 
 __all__ = [
     "MAX_OFF_LINE",
@@ -264,6 +270,14 @@ def _row_line(centres: np.ndarray, reference_rotation: np.ndarray) -> tuple[np.n
     return (line if along[k] >= 0 else -line), "xy"[k]
 
 
+def _camera_list(name: str, cameras) -> list:
+    """``cameras`` as a list; TypeError naming ``name`` where it is no sequence (a single camera, None)."""
+    if isinstance(cameras, CalibratedCamera) or not isinstance(cameras, Iterable) or isinstance(cameras, (str, bytes)):
+        msg = f"{name} must be a sequence of CalibratedCamera, one per view, got {type(cameras).__name__}"
+        raise TypeError(msg)
+    return list(cameras)
+
+
 def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
     """Resample a calibrated row of views to one camera and orientation, spaced along its X axis.
 
@@ -298,15 +312,13 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         A camera centre off the fitted line by more than :data:`MAX_OFF_LINE`
         of the smallest neighbour spacing.
     """
-    cameras = list(cameras)
+    cameras = _camera_list("cameras", cameras)
     views = list(views)
     n = len(views)
     if n < 2 or len(cameras) != n:
         msg = f"rectify_row needs at least 2 views and one camera per view, got {n} views and {len(cameras)} cameras"
         raise ValueError(msg)
-    if isinstance(reference, (bool, np.bool_)) or not isinstance(reference, (int, np.integer)) or not 0 <= reference < n:
-        msg = f"reference must be an integer index of the views, 0..{n - 1}, got {reference!r}"
-        raise ValueError(msg)
+    reference = check_view_index("reference", reference, n)
     for k, (v, cam) in enumerate(zip(views, cameras)):
         if not isinstance(cam, CalibratedCamera):
             msg = f"cameras[{k}] must be a CalibratedCamera, got {type(cam).__name__}"
@@ -762,16 +774,13 @@ def calibrated_grid_depth(
     ValueError
         The two lines' reference cameras or images differ.
     """
-    from ._validate import check_positive_or_inf
     from .depth import Reason
     from .xy_stereo import _warn_if_axes_disagree, fuse_axes
 
     limit = check_positive_or_inf("max_line_disagreement_px", max_line_disagreement_px)
-    row_cameras, column_cameras = list(row_cameras), list(column_cameras)
-    for name, cams, ref in (("row", row_cameras, row_reference), ("column", column_cameras, column_reference)):
-        if isinstance(ref, (bool, np.bool_)) or not isinstance(ref, (int, np.integer)) or not 0 <= ref < len(cams):
-            msg = f"{name}_reference must be an integer index of the {name}'s cameras, 0..{len(cams) - 1}, got {ref!r}"
-            raise ValueError(msg)
+    row_cameras, column_cameras = _camera_list("row_cameras", row_cameras), _camera_list("column_cameras", column_cameras)
+    row_reference = check_view_index("row_reference", row_reference, len(row_cameras))
+    column_reference = check_view_index("column_reference", column_reference, len(column_cameras))
     if row_cameras[row_reference] != column_cameras[column_reference]:
         msg = "the row's and the column's reference cameras must be the same camera: both lines pass through it"
         raise ValueError(msg)
