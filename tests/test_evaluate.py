@@ -69,6 +69,25 @@ def test_disparity_errors_exact_values():
         disparity_errors(est, truth, truth_step_px="fine")
 
 
+def test_rms_ratio_reads_a_two_valued_error_bar_that_the_median_reads_low():
+    """Errors that are 0 for 90 % of the points and 3 px for the rest (an estimate right, or a whole depth
+    step off), with the std their RMS, sqrt(0.1 * 9) px: a calibrated error bar for a user who weights or
+    thresholds by it. The median |error| / std reads 0 (half the points are exact); the RMS ratio reads
+    exactly 1, and twice the std halves it."""
+    truth = np.linspace(5.0, 20.0, 1000).reshape(20, 50)
+    est = truth.copy()
+    est.flat[::10] += 3.0
+    std = np.full(truth.shape, math.sqrt(0.1 * 9.0))
+    e = disparity_errors(est, truth, uncertainty=std)
+    assert e["median_z"] == 0.0
+    assert e["within_3std"] == pytest.approx(0.9)  # the whole-step errors lie at 3 / 0.949 = 3.16 std
+    assert e["rms_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert disparity_errors(est, truth, uncertainty=2 * std)["rms_ratio"] == pytest.approx(0.5, rel=1e-12)
+    # the truth's rounding enters in quadrature: a step of sqrt(12) px adds 1 px^2 to every std^2
+    rounded = disparity_errors(est, truth, uncertainty=std, truth_step_px=math.sqrt(12.0))
+    assert rounded["rms_ratio"] == pytest.approx(math.sqrt(0.9 / 1.9), rel=1e-12)
+
+
 def test_median_z_of_a_calibrated_error_bar_is_a_gaussians():
     """Errors drawn with the std the map reports: median |z| 0.674 and 99.7 % within 3 std (200k points: +-1 %).
     A std half the errors' reads twice that; a truth rounded to a step with an exact estimate and a std of 0
@@ -79,10 +98,12 @@ def test_median_z_of_a_calibrated_error_bar_is_a_gaussians():
     est = truth + rng.normal(0.0, 1.0, truth.shape) * std
     e = disparity_errors(est, truth, uncertainty=std)
     assert e["median_z"] == pytest.approx(GAUSSIAN_MEDIAN_Z, rel=0.01)
+    assert e["rms_ratio"] == pytest.approx(1.0, rel=0.01)
     assert e["within_3std"] == pytest.approx(0.9973, abs=0.001)
     narrow = disparity_errors(est, truth, uncertainty=std / 2)
     assert narrow["median_z"] == pytest.approx(2 * GAUSSIAN_MEDIAN_Z, rel=0.01)
-    assert math.isnan(disparity_errors(est, truth)["median_z"]) and math.isnan(disparity_errors(est, truth)["within_3std"])
+    assert narrow["rms_ratio"] == pytest.approx(2.0, rel=0.01)
+    assert all(math.isnan(disparity_errors(est, truth)[key]) for key in ("median_z", "rms_ratio", "within_3std"))
     step = 0.125
     rounded = np.round(truth / step) * step
     r = disparity_errors(truth, rounded, truth_step_px=step, uncertainty=np.zeros(truth.shape))
@@ -91,6 +112,10 @@ def test_median_z_of_a_calibrated_error_bar_is_a_gaussians():
     # only points with a finite std count; an exact estimate with a std of 0 has z = 0
     part = disparity_errors(np.array([[1.0, 2.0, 3.5]]), np.array([[1.0, 2.0, 3.0]]), uncertainty=np.array([[0.0, np.nan, 0.1]]))
     assert part["points"] == 3 and part["median_z"] == pytest.approx(2.5) and part["within_3std"] == 0.5
+    # sqrt((0 + 0.25) / 2) / sqrt((0 + 0.01) / 2) = 5
+    assert part["rms_ratio"] == pytest.approx(5.0)
+    assert disparity_errors(np.array([[1.0, 2.0]]), np.array([[1.0, 2.0]]), uncertainty=np.zeros((1, 2)))["rms_ratio"] == 0.0
+    assert disparity_errors(np.array([[1.5, 2.0]]), np.array([[1.0, 2.0]]), uncertainty=np.zeros((1, 2)))["rms_ratio"] == math.inf
     with pytest.raises(ValueError, match=r"uncertainty must have the shape of truth \(400, 500\), got \(2, 2\)"):
         disparity_errors(est, truth, uncertainty=np.ones((2, 2)))
     with pytest.raises(ValueError, match="uncertainty must be a standard deviation"):
@@ -699,7 +724,7 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
     assert set(res["methods"]) == {"nfdepth", "sgbm", "waxman_sinha"}
     keys = {
         "points", "truth_points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
-        "median_z", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+        "median_z", "rms_ratio", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
     }
     assert res["truth_step_px"] == 1.0  # whole-pixel labels
     assert "stored in steps of 1 px" in out and "bias px" in out and "near a depth step" in out and "bad>1 off" in out
@@ -717,10 +742,13 @@ def test_cli_evaluate_tsukuba_json(capsys, tmp_path):
         d = entry["dense"]
         mix = d["near_steps_share"] * d["bad_1px_near_steps"] + (1 - d["near_steps_share"]) * d["bad_1px_off_steps"]
         assert mix == pytest.approx(d["bad_1px"], abs=1e-12)
-    # nfdepth's error bar against the whole-pixel truth (its rounding in quadrature): measured 0.60 at the edge
-    # points, 1.0 dense; the peers report no std
-    assert "err/std" in out
+    # nfdepth's error bar against the whole-pixel truth (its rounding in quadrature): median |error| / std
+    # measured 0.60 at the edge points, 0.33 dense (whose errors near steps are two-valued: small or a
+    # whole step); RMS error / RMS std 1.09 and 1.08, calibrated within the project's factor 1.5. The peers
+    # report no std.
+    assert "err/std" in out and "rms e/s" in out
     nf = res["methods"]["nfdepth"]
+    assert all(1 / 1.5 < nf[part]["rms_ratio"] < 1.5 for part in ("edges", "dense")), nf
     assert GAUSSIAN_MEDIAN_Z / 1.5 < nf["edges"]["median_z"] < GAUSSIAN_MEDIAN_Z * 1.5 and nf["edges"]["within_3std"] > 0.9
     assert nf["dense"]["median_z"] < 2 * GAUSSIAN_MEDIAN_Z and nf["filled"]["median_z"] is None
     assert res["methods"]["sgbm"]["dense"]["median_z"] is None and res["methods"]["sgbm"]["nfdepth_at_shared_edges"]["median_z"] > 0

@@ -88,17 +88,16 @@ def _fmt_table(res) -> str:
         + "".join(f"; nfdepth {key} = {value:g}" for key, value in sorted(res.get("stereo_options", {}).items())),
         (
             f"  {'method':<{width}} {'points':>7} {'density':>7} {'med rel':>7} {'rounding':>8} {'p90 rel':>7} {'bad>1':>6} {'bad>.5':>6} "
-            f"{'bias px':>7} {'err/std':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
+            f"{'bias px':>7} {'err/std':>7} {'rms e/s':>7} {'near step':>9} {'bad>1 off':>9} {'runtime':>8}"
         ),
     ]
     for label, e, runtime_s in rows:
         bias = e.get("bias_px", float("nan"))
-        z = e.get("median_z")
-        z = float("nan") if z is None else z
+        z, rms = (float("nan") if e.get(key) is None else e[key] for key in ("median_z", "rms_ratio"))
         lines.append(
             f"  {label:<{width}} {e['points']:>7d} {pct(e['density']):>7} {pct(e['median_rel'], 2):>7} {pct(e.get('truth_rounding_rel'), 2):>8} "
             f"{pct(e['p90_rel'], 2):>7} {pct(e['bad_1px']):>6} {pct(e['bad_0_5px']):>6} "
-            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {'      -' if math.isnan(z) else format(z, '7.2f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
+            f"{'      -' if math.isnan(bias) else format(bias, '+7.3f')} {'      -' if math.isnan(z) else format(z, '7.2f')} {'      -' if math.isnan(rms) else format(rms, '7.2f')} {pct(e.get('near_steps_share')):>9} {pct(e.get('bad_1px_off_steps')):>9} "
             f"{runtime_s:>7.3f}s"
         )
     return "\n".join(lines)

@@ -73,7 +73,7 @@ METHODS = ("nfdepth", "sgbm", "bm", "waxman_sinha", "waxman_sinha_farneback")
 DEFAULT_METHODS = ("nfdepth", "sgbm", "waxman_sinha")
 _ERROR_KEYS = (
     "points", "density", "median_rel", "p90_rel", "bad_1px", "bad_0_5px", "mae_px", "bias_px", "truth_rounding_rel",
-    "median_z", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
+    "median_z", "rms_ratio", "within_3std", "near_steps_share", "bad_1px_near_steps", "bad_1px_off_steps",
 )
 #: median |z| of a standard normal: what ``median_z`` of a calibrated error bar reads
 GAUSSIAN_MEDIAN_Z = 0.6744897501960817
@@ -100,7 +100,7 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
         the bad-1px rate at and away from them.
     uncertainty : array_like, shape (H, W), optional
         The estimate's standard deviation (px, ``StereoResult.uncertainty``);
-        gives ``median_z`` and ``within_3std``.
+        gives ``median_z``, ``rms_ratio`` and ``within_3std``.
 
     Returns
     -------
@@ -120,7 +120,11 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
         sqrt(std**2 + truth_step_px**2 / 12)`` (the truth's rounding, a
         uniform error, in quadrature; 0 without a step), which reads
         :data:`GAUSSIAN_MEDIAN_Z` (0.674) where the error bar is calibrated and
-        the errors Gaussian, more where it is too narrow, and
+        the errors Gaussian, more where it is too narrow; ``rms_ratio``: the
+        RMS of ``|d - d_true|`` over the RMS of that scale, 1 where the error
+        bar is calibrated whatever the errors' distribution (the figure to
+        read where they are two-valued, small or a whole depth step, and the
+        median reads low), more where it is too narrow; and
         ``within_3std``: the share of those ratios at most 3 (99.7 % for
         Gaussian errors), over the points with a finite std, NaN without
         ``uncertainty``; ``near_steps_share``: the share of points in
@@ -169,7 +173,7 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
     out["mae_px"] = float(np.mean(err))
     out["bias_px"] = float(np.median(signed))
     out["truth_rounding_rel"] = rounding_median_rel(t, truth_step_px) if truth_step_px is not None else math.nan
-    out.update({key: math.nan for key in _ERROR_KEYS[-5:]})
+    out.update({key: math.nan for key in _ERROR_KEYS[-6:]})
     if uncertainty is not None:
         std = std_map[both]
         known = np.isfinite(std)
@@ -178,6 +182,8 @@ def disparity_errors(estimate, truth, *, mask=None, truth_step_px=None, near_ste
             with np.errstate(divide="ignore", invalid="ignore"):
                 z = np.where(err[known] == 0.0, 0.0, err[known] / scale)  # an exact estimate with a std of 0: z = 0
             out["median_z"] = float(np.median(z))
+            mean_sq_err, mean_sq_scale = float(np.mean(err[known] ** 2)), float(np.mean(scale**2))
+            out["rms_ratio"] = 0.0 if mean_sq_err == 0.0 else math.sqrt(mean_sq_err / mean_sq_scale) if mean_sq_scale > 0.0 else math.inf
             out["within_3std"] = float(np.mean(z <= 3.0))
     if near_steps is not None:
         near = near_steps[both]
@@ -540,7 +546,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
         truth's pixels near its depth steps, :func:`depth_step_mask`) and
         ``methods``: method -> ``{"runtime_s", "dense": errors, "edges":
         errors or None}`` (errors as :func:`disparity_errors`, split at the
-        depth steps; nfdepth's with ``median_z`` and ``within_3std`` of its
+        depth steps; nfdepth's with ``median_z``, ``rms_ratio`` and ``within_3std`` of its
         ``uncertainty``, the peers' NaN); nfdepth's also has ``"filled"``: its dense map with
         the holes filled from the background (:meth:`StereoResult.filled`,
         every pixel of a line with a value); a peer scored at nfdepth's edge points also
@@ -802,8 +808,8 @@ def render_markdown(results) -> str:
         results = [results]
     head = (
         "| scene | views | method | points | density | median rel | truth rounding | p90 rel | bad >1 px | bad >0.5 px | MAE px | bias px "
-        "| median abs(error) / std | near a depth step | bad >1 px near / off steps | runtime s |\n"
-        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| median abs(error) / std | RMS error / RMS std | near a depth step | bad >1 px near / off steps | runtime s |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     )
     lines = [head]
     for res in results:
@@ -812,7 +818,7 @@ def render_markdown(results) -> str:
             lines.append(
                 f"| {res['scene']}{size} | {res['view_count']} | {method} ({label}) | {e['points']} | {_pct(e['density'])} | "
                 f"{_rel(e['median_rel'])} | {_rel(e.get('truth_rounding_rel'))} | {_rel(e['p90_rel'])} | {_pct(e['bad_1px'])} | "
-                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {_px(e.get('median_z'), '.2f')} | {_pct(e.get('near_steps_share'))} | "
+                f"{_pct(e['bad_0_5px'])} | {_px(e['mae_px'], '.3f')} | {_px(e.get('bias_px'), '+.3f')} | {_px(e.get('median_z'), '.2f')} | {_px(e.get('rms_ratio'), '.2f')} | {_pct(e.get('near_steps_share'))} | "
                 f"{_pct(e.get('bad_1px_near_steps'))} / {_pct(e.get('bad_1px_off_steps'))} | {rt:.3f} |"
             )
     return "\n".join(lines)
