@@ -303,3 +303,36 @@ def test_float32_images_refuse_intensities_whose_gradient_products_overflow():
         static_stereo(views, reference=1)
     with pytest.raises(ValueError, match=r"frames\[0\] has intensities up to"):
         normal_flow_edges(views, sigma_px=1.0)
+
+
+class _BytesPath:
+    def __fspath__(self):
+        return b"view.png"
+
+
+def test_paths_refuse_what_is_no_path_with_the_parameters_name():
+    """Every public reader and writer names its path parameter and the type it got (not pathlib's
+    "expected str, bytes or os.PathLike object"); str and os.PathLike are taken as they are."""
+    from pathlib import Path
+
+    from nfdepth._validate import as_path
+    from nfdepth.io import make_output_folder, read_image, read_pfm, write_array
+    from nfdepth.plot import save_figure
+    from nfdepth.rig import load_poses, load_rig
+    from nfdepth.video import read_video, write_video_frame
+
+    assert as_path("path", "a/b.png") == Path("a/b.png") and as_path("path", Path("c.pfm")) == Path("c.pfm")
+    calls = [
+        (read_image, ()), (read_pfm, ()), (load_rig, ()), (load_poses, ()), (read_video, ()), (make_output_folder, ()),
+        (write_array, (np.zeros((2, 2)),)), (save_figure, None), (write_video_frame, None),
+    ]
+    for bad, got in ((None, "NoneType"), (3, "int"), (b"view.png", "bytes"), (_BytesPath(), "_BytesPath")):
+        for fn, rest in calls:
+            if fn is save_figure:
+                args, name = (None, bad), "path"
+            elif fn is write_video_frame:
+                args, name = (None, bad), "folder"
+            else:
+                args, name = (bad, *rest), "path"
+            with pytest.raises(TypeError, match=rf"^{name} must be a file path \(str or os\.PathLike\), got {got}$"):
+                fn(*args)

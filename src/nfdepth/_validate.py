@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -50,6 +51,17 @@ def max_pixels() -> int:
         msg = f"{MAX_PIXELS_ENV} must be a positive number of pixels (e.g. 60000000), got {text!r}"
         raise ValueError(msg)
     return int(value)
+
+
+def as_path(name: str, value) -> Path:
+    """``value`` (a ``str`` or ``os.PathLike``) as a :class:`~pathlib.Path`; TypeError naming ``name`` otherwise (None, bytes, a number)."""
+    if isinstance(value, (str, os.PathLike)):
+        try:
+            return Path(value)
+        except TypeError:  # an os.PathLike whose __fspath__ gives bytes
+            pass
+    msg = f"{name} must be a file path (str or os.PathLike), got {type(value).__name__}"
+    raise TypeError(msg)
 
 
 def check_frame_size(name: str, shape) -> None:

@@ -41,6 +41,7 @@ import numpy as np
 
 from ._validate import (
     NFDepthError,
+    as_path,
     check_bool,
     check_finite,
     check_positive_finite,
@@ -185,7 +186,7 @@ def read_pfm(path) -> np.ndarray:
     ImageReadError
         If the file is missing, a directory, not PFM, or truncated.
     """
-    path = Path(path)
+    path = as_path("path", path)
     data = _read_bytes(path)
     return _decode_pfm(path, data)
 
@@ -439,7 +440,7 @@ def read_image(path, *, grey: bool = True, dtype=np.float32) -> np.ndarray:
     """
     grey = check_bool("grey", grey)
     out_dtype = None if dtype is None else float_dtype(dtype)
-    path = Path(path)
+    path = as_path("path", path)
     ext = path.suffix.lower()
     if path.is_dir():
         raise _read_error(path, "it is a directory, not a file")
@@ -526,7 +527,8 @@ def _kept_on_failure():
 
 def parent_folder_problem(path) -> str | None:
     """Why ``path`` cannot be made in its folder (``"'f' is not a directory"``, ``"directory 'x' does not exist"``), or None."""
-    parent = Path(path).parent if str(Path(path).parent) else Path(".")
+    path = as_path("path", path)
+    parent = path.parent if str(path.parent) else Path(".")
     if parent.is_dir():
         return None
     return f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
@@ -539,7 +541,7 @@ def make_output_folder(path, *, parents: bool = False) -> Path:
     :data:`COMPLETED_WRITES` with the files, so that a failed or
     interrupted run removes it again once its own files are gone.
     """
-    path = Path(path)
+    path = as_path("path", path)
     if not path.is_dir():
         if parents and path.parent != path and not path.parent.is_dir():
             make_output_folder(path.parent, parents=True)
@@ -591,7 +593,7 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
     if not callable(writer_fn):
         msg = f"writer_fn must be callable, got {type(writer_fn).__name__}"
         raise TypeError(msg)
-    path = Path(path)
+    path = as_path("path", path)
     parent = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
         raise OutputWriteError(f"cannot write '{path}': it is a directory")
@@ -638,7 +640,7 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
 
 def require_extension(path, ext: str, *, hint: str = "") -> None:
     """Refuse a ``path`` that does not end in ``ext`` (case-insensitive): a file's bytes under another format's name mislead every reader."""
-    if Path(path).suffix.lower() != ext:
+    if as_path("path", path).suffix.lower() != ext:
         msg = f"path must end in {ext}, got {str(path)!r}{hint}"
         raise ValueError(msg)
 
@@ -739,7 +741,7 @@ def write_array(path, array, *, force: bool = False) -> Path:
     OutputExistsError, OutputWriteError
         See :func:`atomic_write`.
     """
-    path = Path(path)
+    path = as_path("path", path)
     ext = path.suffix.lower()
     if ext not in ARRAY_EXTENSIONS:
         msg = f"path must end in one of {', '.join(ARRAY_EXTENSIONS)}, got {str(path)!r}"

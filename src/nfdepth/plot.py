@@ -34,9 +34,10 @@ __all__ = [
 
 def save_figure(fig: Figure, path, *, dpi: int = 110, force: bool = True) -> Path:
     """Write ``fig`` as PNG atomically (:func:`nfdepth.io.atomic_write`: mode from the umask); an existing ``path`` is replaced unless ``force=False``."""
+    from ._validate import as_path
     from .io import atomic_write
 
-    path = Path(path)
+    path = as_path("path", path)
     path.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
     return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight"), force=force)

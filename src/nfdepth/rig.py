@@ -55,6 +55,7 @@ from ._validate import (
     DISPARITY_OFFSET_EXPECTED,
     UNIT_SCALE_RANGE,
     NFDepthError,
+    as_path,
     check_disparity_offset,
 )
 from .camera import (
@@ -265,7 +266,7 @@ def load_poses(path) -> Poses:
     units); ``rx, ry, rz`` its camera-to-world orientation as a rotation
     vector in degrees. Raises :class:`RigError` naming the line and column.
     """
-    path = Path(path)
+    path = as_path("path", path)
     if not path.is_file():
         raise FileNotFoundError(f"cannot read poses file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
     try:
@@ -802,7 +803,7 @@ def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
 
 def _read_toml(path, kind: str) -> tuple[Path, dict]:
     """``(path, parsed document)`` of a TOML file; errors name the ``kind`` of file ("rig", "cameras")."""
-    path = Path(path)
+    path = as_path("path", path)
     if not path.is_file():
         raise FileNotFoundError(f"cannot read {kind} file '{path}': {'it is a directory' if path.is_dir() else 'no such file'}")
     try:

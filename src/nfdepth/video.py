@@ -103,6 +103,7 @@ from ._translating_pyramid import (
 from ._validate import (
     UNIT_SCALE_RANGE,
     as_image,
+    as_path,
     check_bool,
     check_fraction,
     check_int,
@@ -271,7 +272,7 @@ def read_video(path) -> FrameSource:
     ImageReadError
         Nothing matched, or an unsupported file type.
     """
-    text = str(path)
+    text = str(as_path("path", path))
     p = Path(text)
     if p.is_dir():
         try:
@@ -1299,7 +1300,7 @@ def write_video_npz(results, path, *, camera: PinholeCamera | None = None, force
         payload[name] = np.stack([np.asarray(getattr(r, name), dtype=np.float32) for r in results]) if results else np.zeros((0, 0, 0), np.float32)
     if camera is not None:
         payload.update(focal_px=np.float64(camera.focal_px), cx_px=np.float64(camera.cx_px), cy_px=np.float64(camera.cy_px))
-    return atomic_write(Path(path), lambda fh: np.savez_compressed(fh, **payload), force=force)
+    return atomic_write(path, lambda fh: np.savez_compressed(fh, **payload), force=force)
 
 
 def video_frame_names(index: int, *, dense: bool = False) -> tuple[str, str]:
@@ -1312,7 +1313,7 @@ def write_video_frame(result: VideoDepthFrame, folder, *, force: bool = False) -
     """Write one frame's fused depth and std as float32 TIFFs (NaN unknown), each atomically; its dense maps too when it has them."""
     from .io import write_array
 
-    folder = Path(folder)
+    folder = as_path("folder", folder)
     maps = [(video_frame_names(result.index), result.depth, result.depth_std)]
     if getattr(result, "dense_inverse_depth", None) is not None:
         maps.append((video_frame_names(result.index, dense=True), result.dense_depth, result.dense_depth_std))
@@ -1586,4 +1587,4 @@ def write_crossings_npz(results, path, *, camera: PinholeCamera | None = None, f
         payload[name] = np.stack([np.asarray(getattr(r, name), dtype=np.float32) for r in results]) if results else np.zeros((0, 0, 0), np.float32)
     if camera is not None:
         payload.update(focal_px=np.float64(camera.focal_px), cx_px=np.float64(camera.cx_px), cy_px=np.float64(camera.cy_px))
-    return atomic_write(Path(path), lambda fh: np.savez_compressed(fh, **payload), force=force)
+    return atomic_write(path, lambda fh: np.savez_compressed(fh, **payload), force=force)
