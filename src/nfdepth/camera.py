@@ -282,6 +282,33 @@ def image_flow(x, y, inverse_depth, motion: RigidMotion):
         v = -\\Omega_X (1 + y^2) + \\Omega_Y x y + \\Omega_Z x + (V_Y - y V_Z)/Z
 
     ``inverse_depth`` is ``1/Z`` (0 for points at infinity).
+
+    Parameters
+    ----------
+    x, y : array_like
+        Normalised image coordinates ``x = X/Z``, ``y = Y/Z`` (pixel offsets from the
+        principal point over the focal length: :meth:`PinholeCamera.to_normalized`).
+    inverse_depth : array_like
+        ``1/Z`` in 1/scene units; 0 gives the rotational flow alone. Not checked: a
+        negative value (a point behind the camera) is used as given.
+    motion : RigidMotion
+        Motion ``(V, Omega)`` of the scene relative to the camera, ``V`` in scene units
+        and ``Omega`` in radians per unit time (a camera translating by ``T`` sees ``V = -T``).
+
+    Returns
+    -------
+    u, v : ndarray of float64
+        Flow along ``x`` (+col) and ``y`` (+row) in normalised units per unit time, of
+        the broadcast shape of ``x``, ``y`` and ``inverse_depth`` (NumPy float64 scalars
+        for scalar input). NaN inputs give NaN.
+
+    Raises
+    ------
+    TypeError
+        ``motion`` is not a :class:`RigidMotion`, or ``x``, ``y`` or ``inverse_depth``
+        is not real numbers (complex, text, objects).
+    ValueError
+        The three do not broadcast together (NumPy's error).
     """
     motion = _motion("motion", motion)
     x, y, rho = _real("x", x), _real("y", y), _real("inverse_depth", inverse_depth)
@@ -294,6 +321,33 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
     """Image flow in pixels per unit time at pixel positions with depth ``Z``.
 
     Returns ``(flow_col, flow_row)``: eq. 1 multiplied by the focal length.
+
+    Parameters
+    ----------
+    camera : PinholeCamera
+        Focal length and principal point (px) that map ``rows``, ``cols`` to the
+        normalised ``x``, ``y`` of eq. 1.
+    rows, cols : array_like
+        Pixel positions (``row`` downward, ``col`` to the right; need not be integers).
+    depth : array_like
+        Depth ``Z`` along the optical axis in scene units (those of
+        ``motion.translation``). ``inf`` gives the rotational flow alone; 0 gives
+        infinite or NaN flow; a negative depth (behind the camera) is used as given.
+    motion : RigidMotion
+        Scene motion relative to the camera, per unit time (as in :func:`image_flow`).
+
+    Returns
+    -------
+    flow_col, flow_row : ndarray of float64
+        ``f u`` and ``f v``: the flow along +col and +row in px per unit time, of the
+        broadcast shape of ``rows``, ``cols`` and ``depth`` (NumPy float64 scalars for
+        scalar input).
+
+    Raises
+    ------
+    TypeError
+        ``motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols`` or ``depth`` is
+        not real numbers (complex, text, objects).
     """
     x, y = camera.to_normalized(rows, cols)
     with np.errstate(divide="ignore"):
@@ -305,6 +359,35 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
 def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: RigidMotion):
     """Normal flow ``Vn = u cos(alpha) + v sin(alpha)`` in px per unit time (eq. 3).
 
+    Parameters
+    ----------
+    camera : PinholeCamera
+        Focal length and principal point (px) of the image.
+    rows, cols : array_like
+        Pixel positions.
+    depth : array_like
+        Depth ``Z`` in scene units (as in :func:`image_flow_px`).
+    alpha : array_like
+        Direction of the normal ``n = (cos alpha, sin alpha)`` in radians, measured from
+        the +col axis toward +row: ``atan2(I_row, I_col)``
+        (:attr:`nfdepth.normal_flow.GradientField.alpha`).
+    motion : RigidMotion
+        Scene motion relative to the camera, per unit time (as in :func:`image_flow`).
+
+    Returns
+    -------
+    ndarray of float64
+        Signed normal flow in px per unit time (> 0 along ``n``), of the broadcast shape
+        of ``rows``, ``cols``, ``depth`` and ``alpha`` (a NumPy float64 for scalar input).
+
+    Raises
+    ------
+    TypeError
+        ``motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols``, ``depth`` or
+        ``alpha`` is not real numbers (complex, text, objects).
+
+    Examples
+    --------
     A camera moving right at 2 units per unit time sees a point 400 units
     ahead at the principal point move left at ``f Vx / Z = 100 * -2 / 400``:
 
@@ -324,6 +407,37 @@ def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, 
     ``A = f * (rotational flow of dOmega) . n`` and
     ``B = f * (dVx - x dVz, dVy - y dVz) . n`` with ``n = (cos alpha, sin alpha)``.
     Inverse depth follows as ``rho = (dVn - A) / B`` where ``B != 0``.
+
+    Parameters
+    ----------
+    camera : PinholeCamera
+        Focal length and principal point (px) of the reference image, in which the
+        relative normal flow is measured.
+    rows, cols : array_like
+        Pixel positions of the points.
+    alpha : array_like
+        Normal direction in radians, from the +col axis toward +row
+        (``atan2(I_row, I_col)``).
+    relative_motion : RigidMotion
+        ``(dV, dOmega) = (V_m - V_s, Omega_m - Omega_s)``: the scene's motion relative
+        to camera m minus that relative to camera s (``motion_m - motion_s``), per unit
+        time, ``dV`` in scene units, ``dOmega`` in radians.
+
+    Returns
+    -------
+    A, B : ndarray of float64
+        ``A`` in px per unit time: the relative rotation's normal flow (no depth in it).
+        ``B`` in px per unit time per unit inverse depth: the relative translation's
+        normal flow at ``Z = 1`` scene unit; 0 (up to rounding) where the relative
+        motion has no translation or the normal is perpendicular to the translational
+        flow (depth undeterminable). Both of the broadcast shape of ``rows``, ``cols`` and ``alpha``
+        (0-d for scalar input).
+
+    Raises
+    ------
+    TypeError
+        ``relative_motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols`` or
+        ``alpha`` is not real numbers (complex, text, objects).
     """
     relative_motion = _motion("relative_motion", relative_motion)
     x, y = camera.to_normalized(rows, cols)

@@ -334,6 +334,31 @@ def load_tsukuba(root=None) -> MultiViewScene:
 
     Disparity ``d = v / 16`` px between neighbours (5..14 px), ``v = 0``
     (20.7 %, a border band) is NaN. Focal length and baseline unpublished.
+
+    Parameters
+    ----------
+    root : str or os.PathLike, optional
+        Data folder; see :func:`data_root`. The files are read from its
+        ``tsukuba`` folder.
+
+    Returns
+    -------
+    MultiViewScene
+        Named ``"tsukuba"``: 5 views ``col1 .. col5``, ``reference_index`` 2,
+        ``truth_step_px`` 1 (hand-labelled whole-pixel layers); ``focal_px``,
+        ``baseline`` None and ``disparity_offset_px`` 0 (depth only up to scale).
+
+    Raises
+    ------
+    DataNotFoundError
+        If the data root or one of the scene's files (``scene1.row3.col1.ppm``
+        .. ``col5.ppm``, ``truedisp.row3.col3.pgm``) is missing.
+    DataFileError
+        (a DataNotFoundError) If the views differ in size, or the ground
+        truth is of another size or holds no known disparity.
+    nfdepth.io.ImageReadError
+        If a file cannot be decoded, or the ground truth is in colour (not
+        a DataNotFoundError).
     """
     folder = data_root(root) / "tsukuba"
     views_p = [folder / f"scene1.row3.col{k}.ppm" for k in range(1, 6)]
@@ -352,6 +377,32 @@ def load_teddy(root=None) -> MultiViewScene:
     Disparity ``d = v / 16`` px between neighbours (3.1..13.2 px) from
     ``disp2.pgm``; ``v = 0`` (2.0 %) is NaN. Focal length and baseline
     unpublished.
+
+    Parameters
+    ----------
+    root : str or os.PathLike, optional
+        Data folder; see :func:`data_root`. The files are read from its
+        ``middlebury2003-teddy`` folder.
+
+    Returns
+    -------
+    MultiViewScene
+        Named ``"teddy"``: 9 views ``im0 .. im8``, ``reference_index`` 2,
+        ``truth_step_px`` 1/16 (``v``, a whole number, is 4 times the
+        disparity between im2 and im6, 4 view steps apart); ``focal_px``,
+        ``baseline`` None and ``disparity_offset_px`` 0 (depth only up to scale).
+
+    Raises
+    ------
+    DataNotFoundError
+        If the data root or one of the scene's files (``im0.png`` ..
+        ``im8.png``, ``disp2.pgm``) is missing.
+    DataFileError
+        (a DataNotFoundError) If the views differ in size, or the ground
+        truth is of another size or holds no known disparity.
+    nfdepth.io.ImageReadError
+        If a file cannot be decoded, or the ground truth is in colour (not
+        a DataNotFoundError).
     """
     folder = data_root(root) / "middlebury2003-teddy"
     views_p = [folder / f"im{k}.png" for k in range(9)]
@@ -416,6 +467,34 @@ def load_motorcycle(root=None) -> MultiViewScene:
     Disparity from ``motorcycle_disp.npz`` (``arr_0``, px; ``+inf`` is NaN),
     ``f = 994.978`` px, ``b = 193.001`` mm, ``doffs = 31.086`` px, principal
     point ``(311.193, 254.877)`` px.
+
+    Parameters
+    ----------
+    root : str or os.PathLike, optional
+        Data folder; see :func:`data_root`. The files are read from its
+        ``skimage-motorcycle`` folder.
+
+    Returns
+    -------
+    MultiViewScene
+        Named ``"motorcycle"``: views ``[left, right]``, ``reference_index`` 0,
+        the disparity as stored (float32 px, every non-finite value NaN),
+        ``focal_px`` 994.978, ``baseline`` 193.001, ``baseline_unit``
+        ``"mm"``, ``disparity_offset_px`` 31.086, ``principal_point_px``
+        ``(311.193, 254.877)``, ``truth_step_px`` None: :meth:`MultiViewScene.depth`
+        in mm.
+
+    Raises
+    ------
+    DataNotFoundError
+        If the data root or one of the scene's files (``motorcycle_left.png``,
+        ``motorcycle_right.png``, ``motorcycle_disp.npz``) is missing.
+    DataFileError
+        (a DataNotFoundError) If the ``.npz`` cannot be read or has no
+        ``arr_0``, the views differ in size, or the disparity is of another
+        size or holds no known value.
+    nfdepth.io.ImageReadError
+        If a view cannot be decoded (not a DataNotFoundError).
     """
     folder = data_root(root) / "skimage-motorcycle"
     views_p = [folder / "motorcycle_left.png", folder / "motorcycle_right.png"]
@@ -448,6 +527,14 @@ _SCENE_FILES = {
 
 def list_scenes(root=None) -> list:
     """Names of the scenes whose files are all present under the data root.
+
+    The files are only looked for, not read: :func:`load_scene` may still
+    refuse a scene listed here.
+
+    Parameters
+    ----------
+    root : str or os.PathLike, optional
+        Data folder; see :func:`data_root`.
 
     Returns
     -------
@@ -484,15 +571,38 @@ def missing_scene_files(name: str, root=None) -> list:
 def load_scene(name: str, root=None) -> MultiViewScene:
     """Load a scene by name (see :func:`list_scenes`; case-insensitive).
 
+    Parameters
+    ----------
+    name : str
+        ``"tsukuba"``, ``"teddy"`` (also ``"middlebury2003/teddy"``,
+        ``"middlebury2003-teddy"``), ``"middlebury2005/S"`` with ``S`` one of
+        :data:`MIDDLEBURY2005_SCENES`, or ``"motorcycle"`` (also
+        ``"skimage-motorcycle"``); surrounding spaces are ignored.
+    root : str or os.PathLike, optional
+        Data folder; see :func:`data_root`.
+
+    Returns
+    -------
+    MultiViewScene
+        As :func:`load_tsukuba`, :func:`load_teddy`,
+        :func:`load_middlebury2005` or :func:`load_motorcycle` load it.
+
     Raises
     ------
+    TypeError
+        If ``name`` is not a str.
     ValueError
         For an unknown name (the message lists the known ones).
     DataNotFoundError
         If the data root or one of the scene's files is missing.
     DataFileError
-        (a DataNotFoundError) If a file is there but unusable: unreadable,
-        another size than the views, or a ground truth with no known disparity.
+        (a DataNotFoundError) If a file is there but unusable: views of
+        different sizes, a ground truth of another size than the views or
+        with no known disparity, a ``dmin.txt`` that holds no number, or an
+        unreadable Motorcycle ``.npz``.
+    nfdepth.io.ImageReadError
+        If an image file cannot be decoded, or a ground-truth image is in
+        colour (not a DataNotFoundError).
     """
     if not isinstance(name, str):
         msg = f"name must be a str such as 'tsukuba', got {type(name).__name__}"

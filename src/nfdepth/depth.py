@@ -192,7 +192,41 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
 
     ``Z = f dVx cos(alpha) / dVn`` (``dVx`` in scene units per unit time,
     ``dVn`` in px per unit time); NaN where ``Z`` would not be positive.
+    Eq. 6 in pixels: the paper's normalised units times ``f``.
 
+    Parameters
+    ----------
+    delta_vn : array_like
+        Relative normal flow ``Vn_m - Vn_s`` in px per unit time.
+    alpha : array_like
+        Normal direction in radians (``atan2(I_row, I_col)``, from +col toward +row).
+    focal_px : float
+        Focal length ``f`` in pixels (positive, finite).
+    delta_vx : float
+        ``dVx``, the x component of the relative motion ``V_m - V_s`` of the scene, in
+        scene units per unit time (non-zero): camera m translating toward +X relative
+        to camera s gives ``dVx < 0`` (``V = -T``).
+
+    Returns
+    -------
+    ndarray of float64
+        Depth ``Z`` in the scene units of ``delta_vx``, of the broadcast shape of
+        ``delta_vn`` and ``alpha`` (0-d for scalar input). NaN where ``Z`` is not a
+        positive finite number: ``dVn = 0`` (at infinity), ``dVn`` of the sign that puts
+        the point behind the camera, NaN input. There is no ``min_cos`` test: where the
+        normal is nearly perpendicular to x (``cos(alpha)`` near 0) ``Z`` is a number,
+        however unreliable (:func:`solve_inverse_depth` refuses such points).
+
+    Raises
+    ------
+    TypeError
+        ``focal_px`` or ``delta_vx`` is not a number (a str or bool too), or
+        ``delta_vn`` is not real numbers (complex, text, objects).
+    ValueError
+        ``focal_px`` is not positive and finite, ``delta_vx`` is 0 or not finite.
+
+    Examples
+    --------
     >>> float(depth_x_translation(-0.5, 0.0, focal_px=100.0, delta_vx=-2.0))  # the flow of normal_flow_px's example
     400.0
     >>> float(depth_x_translation(0.5, 0.0, focal_px=100.0, delta_vx=-2.0))  # would be behind the camera
@@ -204,14 +238,86 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
 
 
 def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
-    """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``."""
+    """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``.
+
+    Eq. 4 with only ``dVy`` non-zero, the y analogue of eq. 6
+    (:func:`depth_x_translation`); NaN where ``Z`` would not be positive.
+
+    Parameters
+    ----------
+    delta_vn : array_like
+        Relative normal flow ``Vn_m - Vn_s`` in px per unit time.
+    alpha : array_like
+        Normal direction in radians (``atan2(I_row, I_col)``, from +col toward +row).
+    focal_px : float
+        Focal length ``f`` in pixels (positive, finite).
+    delta_vy : float
+        ``dVy``, the y component of the relative motion ``V_m - V_s`` of the scene, in
+        scene units per unit time (non-zero): camera m translating toward +Y (down)
+        relative to camera s gives ``dVy < 0``.
+
+    Returns
+    -------
+    ndarray of float64
+        Depth ``Z`` in the scene units of ``delta_vy``, of the broadcast shape of
+        ``delta_vn`` and ``alpha`` (0-d for scalar input); NaN where ``Z`` is not a
+        positive finite number (``dVn = 0``, a point behind the camera, NaN input). No
+        ``min_cos`` test: near ``sin(alpha) = 0`` ``Z`` is a number, however unreliable.
+
+    Raises
+    ------
+    TypeError
+        ``focal_px`` or ``delta_vy`` is not a number (a str or bool too), or
+        ``delta_vn`` is not real numbers (complex, text, objects).
+    ValueError
+        ``focal_px`` is not positive and finite, ``delta_vy`` is 0 or not finite.
+    """
     f = check_positive_finite("focal_px", focal_px)
     delta_vy = check_nonzero_finite("delta_vy", delta_vy, what="a non-zero finite translation")
     return _special_case(f * delta_vy * np.sin(alpha), delta_vn)
 
 
 def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float):
-    """Depth for a pure z translation: ``Z = -f dVz (x cos a + y sin a) / dVn``."""
+    """Depth for a pure z translation: ``Z = -f dVz (x cos a + y sin a) / dVn``.
+
+    Eq. 4 with only ``dVz`` non-zero; ``x``, ``y`` are the normalised coordinates of
+    ``cols``, ``rows``. The translational flow is radial from the principal point, so
+    depth is undeterminable there and where the normal is perpendicular to the
+    radial direction. NaN where ``Z`` would not be positive.
+
+    Parameters
+    ----------
+    delta_vn : array_like
+        Relative normal flow ``Vn_m - Vn_s`` in px per unit time.
+    alpha : array_like
+        Normal direction in radians (``atan2(I_row, I_col)``, from +col toward +row).
+    camera : PinholeCamera
+        Focal length and principal point (px) of the reference image.
+    rows, cols : array_like
+        Pixel positions of the points.
+    delta_vz : float
+        ``dVz``, the z component of the relative motion ``V_m - V_s`` of the scene, in
+        scene units per unit time (non-zero): camera m moving forward relative to
+        camera s gives ``dVz < 0`` (flow away from the principal point).
+
+    Returns
+    -------
+    ndarray of float64
+        Depth ``Z`` in the scene units of ``delta_vz``, of the broadcast shape of
+        ``delta_vn``, ``alpha``, ``rows`` and ``cols`` (0-d for scalar input); NaN where
+        ``Z`` is not a positive finite number (``dVn = 0``, a point behind the camera,
+        NaN input). No ``min_cos`` test: near the principal point, or with the normal
+        nearly perpendicular to the radial direction, ``Z`` is a number, however unreliable.
+
+    Raises
+    ------
+    TypeError
+        ``camera`` is not a :class:`~nfdepth.camera.PinholeCamera`, ``delta_vz`` is not
+        a number (a str or bool too), or ``rows``, ``cols`` or ``delta_vn`` is not real
+        numbers (complex, text, objects).
+    ValueError
+        ``delta_vz`` is 0 or not finite.
+    """
     if not isinstance(camera, PinholeCamera):
         msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
         raise TypeError(msg)
@@ -242,11 +348,48 @@ def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
         \\qquad \\sigma_\\rho = \\Big(\\sum_k w_k B_k^2\\Big)^{-1/2},
         \\qquad w_k = \\sigma_k^{-2}.
 
-    NaN measurements are ignored. Measurements of std 0 (exact) outweigh
+    Measurements with ``B = 0`` or a non-finite ``dVn``, ``A``, ``B`` or std (NaN:
+    unknown) are ignored. Measurements of std 0 (exact) outweigh
     every other: where a point has any, they alone give its estimate (equal
     weights) and its std is 0. A negative std is refused (ValueError).
-    Returns ``(rho, rho_std, count)`` reduced along ``axis``; NaN where no
-    measurement has ``B != 0``.
+    The three results have the broadcast shape of the inputs without ``axis``
+    (for 1-D input: 0-d arrays and a NumPy integer).
+
+    Parameters
+    ----------
+    delta_vn : array_like
+        Relative normal flows ``dVn_k`` in px per unit time, the measurements running
+        along ``axis``.
+    a, b : array_like
+        Their coefficients ``A_k`` (px per unit time) and ``B_k`` (px per unit time per
+        unit inverse depth) from :func:`nfdepth.camera.relative_normal_flow_coefficients`.
+        The model is linear in any units: with ``a = 0`` and ``b = 1`` the result is the
+        inverse-variance mean of ``delta_vn``.
+    delta_vn_std : array_like
+        Standard deviation ``std_k`` of each ``dVn_k`` (>= 0; 0: exact; NaN: unknown).
+        All four arrays broadcast together.
+    axis : int
+        Axis of the broadcast arrays that runs over the measurements.
+
+    Returns
+    -------
+    rho : ndarray of float64
+        Inverse depth ``1/Z`` in 1/scene units (in general the unit of ``(dVn - A) / B``);
+        NaN where no measurement is usable. Its sign is not checked (it may be <= 0).
+    rho_std : ndarray of float64
+        Its standard deviation ``sigma_rho``: 0 where exact measurements decided, NaN
+        where ``rho`` is.
+    count : ndarray of int
+        Number of measurements used per point (the usable ones, or the exact ones where
+        a point has any).
+
+    Raises
+    ------
+    TypeError
+        ``delta_vn_std`` is not real numbers (complex, text, objects).
+    ValueError
+        ``delta_vn_std`` has a negative value, the arrays do not broadcast together, or
+        ``axis`` is out of range (NumPy's ``AxisError``, a ``ValueError``).
     """
     dvn, a, b, std = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (delta_vn, a, b, _check_std("delta_vn_std", delta_vn_std))))
     usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (b != 0)

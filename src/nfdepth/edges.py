@@ -115,6 +115,32 @@ def block_structure_tensor(grad_col: np.ndarray, grad_row: np.ndarray, *, window
     row or column is replicated), then smoothed with the Gaussian of
     :func:`_corner_window_blocks` (reflected border). Block ``[i, j]`` is
     centred on cell position ``(2i + 0.5, 2j + 0.5)``.
+
+    Parameters
+    ----------
+    grad_col, grad_row : array_like, shape (h, w)
+        Spatial derivatives ``I_col``, ``I_row`` at the cell centres (intensity per
+        px, e.g. :class:`~nfdepth.normal_flow.GradientField`'s), non-empty, 2-D, of one
+        shape; worked on in float64. A NaN spreads over the window.
+    window_sigma_px : float
+        Standard deviation in px (cells) of the whole window once read back at the
+        cells, as :func:`corner_ratio` does: > 0, finite, at most 1e4. The block grid
+        gets a Gaussian of ``sqrt(window_sigma_px**2 - 1) / 2`` blocks (at least 0.1),
+        truncated at 3 of its sigmas; windows of 1 px or less all get the minimal one.
+
+    Returns
+    -------
+    ndarray of float64, shape (3, ceil(h/2), ceil(w/2))
+        The planes ``J_cc``, ``J_rr``, ``J_cr``: windowed means of ``I_col**2``,
+        ``I_row**2`` and ``I_col I_row``, in (intensity per px) squared.
+
+    Raises
+    ------
+    ValueError
+        ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
+        ``window_sigma_px`` is not positive, not finite or above 1e4.
+    TypeError
+        ``window_sigma_px`` is not a number (a str or bool too).
     """
     sigma, radius = _corner_window_blocks(window_sigma_px)
     gc = np.asarray(grad_col, dtype=np.float64)
@@ -183,6 +209,29 @@ def corner_ratio(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px:
     points its ratio is within ~0.005 (90th percentile) of a full-grid
     Gaussian window's for windows of 2 px or more, ~0.014 at 1-1.5 px
     (tests/test_edges.py).
+
+    Parameters
+    ----------
+    grad_col, grad_row : array_like, shape (h, w)
+        Spatial derivatives at the cell centres, as in :func:`block_structure_tensor`.
+    window_sigma_px : float
+        Standard deviation of the Gaussian window in px (> 0, finite, at most 1e4);
+        ``corner_window_px`` of :func:`select_edge_points`.
+
+    Returns
+    -------
+    ndarray of float64, shape (h, w)
+        ``lambda_2 / lambda_1``, the smaller over the larger eigenvalue of the
+        windowed tensor at each cell, within [0, 1]; NaN where the window holds no
+        gradient (``lambda_1 = 0``) or reaches a NaN gradient.
+
+    Raises
+    ------
+    ValueError
+        ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
+        ``window_sigma_px`` is not positive, not finite or above 1e4.
+    TypeError
+        ``window_sigma_px`` is not a number (a str or bool too).
     """
     jxx, jyy, jxy = _read_back(block_structure_tensor(grad_col, grad_row, window_sigma_px=window_sigma_px), np.shape(grad_col))
     # 0.5 (jxx + jyy) +/- sqrt(max(0.25 (jxx - jyy)^2 + jxy^2, 0)), in place in the read-back's planes
@@ -295,6 +344,21 @@ def select_edge_points(
     border_px : int
         Cells this close to the image border are dropped (their smoothing
         saw the reflected border).
+
+    Returns
+    -------
+    EdgeSelection
+        All maps of shape (H-1, W-1), cell ``[r, c]`` centred at pixel
+        ``(r + 0.5, c + 0.5)``. ``mask``: the usable edge points, cells that are
+        zero crossings (:func:`laplacian_zero_crossings`), strong (``|grad I| >=
+        min_gradient`` and above float32 rounding, :func:`rounding_gradient_floor`)
+        and not corners, outside the ``border_px`` outermost rows and columns of
+        cells (none when the grid is not larger than ``2 border_px``).
+        ``zero_crossing`` and ``strong``: those rules alone, border included;
+        ``corner``: the strong zero crossings whose ``corner_ratio`` exceeds
+        ``max_corner_ratio`` (or is NaN); ``min_gradient``: the threshold used (given or
+        computed), a float; ``corner_ratio``: :func:`corner_ratio` with
+        ``corner_window_px``.
     """
     if not isinstance(field, GradientField):
         msg = f"field must be a nfdepth.GradientField (from normal_flow), got {type(field).__name__}"

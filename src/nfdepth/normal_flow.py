@@ -157,9 +157,34 @@ def _real_image(name: str, image) -> np.ndarray:
 def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
     """Gaussian smoothing (OpenCV, reflected border); ``sigma_px = 0`` copies.
 
-    The kernel is truncated at 4 sigma on each side. ``image``: a 2-D real
-    array; float32 and float64 keep their type, integer or boolean images
-    are smoothed as float64.
+    The kernel is truncated at 4 sigma on each side (``2 ceil(4 sigma) + 1``
+    taps, at least 3), the same along rows and columns; the border is
+    OpenCV's ``BORDER_REFLECT`` (the edge pixel repeated: ``cba|abc``). This is
+    the smoothing step of paper section 3.1.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W)
+        A non-empty 2-D array of real numbers (or booleans). Its values are not
+        checked: a NaN or inf spreads over the kernel's reach.
+    sigma_px : float
+        Standard deviation of the Gaussian in pixels: finite, from 0 (no smoothing)
+        to 1e4.
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+        A new array (never a view of ``image``): float32 for float32 input, float64
+        for float64, integer, boolean or other real input.
+
+    Raises
+    ------
+    TypeError
+        ``image`` is not real numbers (complex, text, objects), or ``sigma_px`` is not
+        a number (a str or bool too).
+    ValueError
+        ``image`` is not 2-D or is empty, or ``sigma_px`` is negative, not finite or
+        above 1e4.
     """
     sigma_px = check_scale_px("sigma_px", sigma_px)
     image = _real_image("image", image)
@@ -321,7 +346,30 @@ def estimate_noise_std(image: np.ndarray) -> float:
     responses, scaled for a normal distribution, ignores the edges that
     inflate the plain mean (up to 10 % of the pixels). Unlike the median it
     sees the quantisation noise of 8-bit frames (std 1/sqrt(12) grey level)
-    instead of returning 0. Returns 0 for noise-free piecewise-constant images.
+    instead of returning 0. Returns 0 for noise-free piecewise-constant images
+    (where fewer than 10 % of the responses lie at an edge).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W)
+        One grey image, at least 3 x 3, of finite real intensities in any linear
+        unit; worked on in float64. Only pixels with all eight neighbours inside the
+        image contribute. The noise is assumed independent from pixel to pixel.
+
+    Returns
+    -------
+    float
+        The noise standard deviation in the image's intensity unit (grey levels),
+        >= 0. Where edges or fine texture cover more than about 10 % of the pixels,
+        they inflate it.
+
+    Raises
+    ------
+    TypeError
+        ``image`` is not numeric or is complex.
+    ValueError
+        ``image`` is not 2-D (convert colour to grey first,
+        :func:`nfdepth.io.to_grey`), is smaller than 3 x 3, or holds NaN or inf.
     """
     img = as_image("image", image, np.float64)
     if min(img.shape) < 3:
@@ -352,6 +400,38 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     standard deviation of independent white noise in every frame. Computed
     exactly from the effective linear filters (Gaussian, then the stencil).
     ``n_frames``: 3 for a triple, 2 for the two-image variant.
+    Noise of std ``s`` grey levels thus gives a normal flow ``Vn = -I_t / |grad I|``
+    a standard deviation of about ``s sqrt((temporal / dt)**2 + (Vn spatial)**2) / |grad I|``
+    px per unit time, as the pipelines use it.
+
+    Parameters
+    ----------
+    sigma_px : float
+        Standard deviation of the Gaussian smoothing in px, as given to
+        :func:`gaussian_smooth` or :func:`normal_flow`: finite, from 0 (none) to 1e4.
+    stencil : {"matched", "simpson", "paper"}
+        Gradient stencil (module docstring); it changes only the spatial gain.
+    n_frames : int
+        3 for a triple (the three-frame stencil), 2 for the two-image variant
+        (Horn and Schunck's cube, :func:`gradients` with two frames).
+
+    Returns
+    -------
+    temporal : float
+        Standard deviation of ``I_t * dt`` per grey level of noise std (dimensionless);
+        the same for every stencil.
+    spatial : float
+        Standard deviation of ``I_col`` and of ``I_row`` (each) per grey level of noise
+        std, in 1/px.
+
+    Raises
+    ------
+    ValueError
+        ``stencil`` is not one of :data:`STENCILS` (a non-str too), ``n_frames`` is
+        not 2 or 3, or ``sigma_px`` is negative, not finite or above 1e4.
+    TypeError
+        ``n_frames`` is not an integer (a float such as ``3.0`` or a bool too), or
+        ``sigma_px`` is not a number (a str or bool too).
     """
     _check_stencil(stencil)
     if check_int("n_frames", n_frames, 2) not in (2, 3):

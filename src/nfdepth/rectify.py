@@ -497,6 +497,50 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
     static stereo's ``disparity_range_px``) and a bound: depths outside it
     are NaN. ``stereo_options`` go to static stereo (not ``positions``,
     ``axis`` or ``reference``).
+
+    Parameters
+    ----------
+    views : sequence of 2-D arrays
+        Grey images, each of its camera's size (at least 2).
+    cameras : sequence of CalibratedCamera
+        One per view, in the same order.
+    reference : int
+        Index of the view in whose camera's pixels, and along whose optical
+        axis, the depth is given.
+    depth_range : (float, float), optional
+        ``(near, far)``, ``0 < near < far``, ``near`` finite (see above).
+    **stereo_options
+        Keyword arguments of :func:`nfdepth.stereo.static_stereo`, except
+        ``positions`` and ``axis`` (set from the cameras) and, with
+        ``depth_range``, ``disparity_range_px``.
+
+    Returns
+    -------
+    CalibratedRowDepth
+        ``depth`` and ``depth_std`` float32 of the reference camera's size,
+        in scene units (those of the cameras' positions).
+
+    Raises
+    ------
+    TypeError
+        ``cameras`` not a sequence of CalibratedCamera; ``reference`` not an
+        int; ``positions`` or ``axis`` in ``stereo_options``, or
+        ``disparity_range_px`` together with ``depth_range``; a
+        ``depth_range`` that is not two numbers.
+        Also what static stereo refuses as such.
+    ValueError
+        What :func:`rectify_row` refuses (a count, size or index that does
+        not fit, two camera centres at the same place, a row within
+        :data:`MIN_SIDEWAYS_DEG` of the cameras' mean optical axis); a
+        ``depth_range`` not ``0 < near < far`` or
+        whose ``near`` is too near for a finite disparity; what static
+        stereo refuses (with ``depth_range``, the message names it).
+
+    Warns
+    -----
+    UserWarning
+        A camera centre off the fitted line (:func:`rectify_row`); most
+        measured depths beyond ``depth_range``; static stereo's own warnings.
     """
     from ._validate import check_depth_range
     from .stereo import (
@@ -621,10 +665,25 @@ def cameras_from_dict(data: dict) -> list:
     (camera-to-world rotation vector, degrees; default none), or as OpenCV's
     ``rvec`` (radians) and ``tvec`` (``X_cam = R X_world + t``).
 
+    Parameters
+    ----------
+    data : dict
+        A parsed TOML document (``tomllib.loads``) whose only key is
+        ``camera``: a non-empty list of tables, one per view.
+
+    Returns
+    -------
+    list of CalibratedCamera
+        One per table, in order.
+
     Raises
     ------
     nfdepth.rig.RigError
-        With the key path, the value and what was expected.
+        With the key path, the value and what was expected: ``data`` not a
+        dict, an unknown key, no ``camera`` list, a missing, wrong or
+        contradictory key of a table (``focal_px`` with ``fy_px``,
+        ``position`` or ``rotation_deg`` with ``rvec`` / ``tvec``), or a
+        camera :class:`CalibratedCamera` refuses.
     """
     from .rig import RigError, _check_keys
 
@@ -648,12 +707,28 @@ def cameras_from_dict(data: dict) -> list:
 def load_cameras(path) -> list:
     """Read a cameras file (TOML, :func:`cameras_from_dict`; ``docs/rig-format.md``, "Calibrated cameras").
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The cameras file, UTF-8 TOML: one ``[[camera]]`` table per view, in
+        the order of the views.
+
+    Returns
+    -------
+    list of CalibratedCamera
+        One per ``[[camera]]`` table, in order.
+
     Raises
     ------
+    TypeError
+        If ``path`` is not a str or os.PathLike.
     FileNotFoundError
-        If the file does not exist.
+        If the file does not exist (or is a directory).
+    nfdepth.io.InputReadError
+        If it cannot be read (e.g. no read permission).
     nfdepth.rig.RigError
         For invalid TOML or an invalid camera; the message starts with the file name.
+        Also a file that is not UTF-8.
     """
     from .rig import RigError, _read_toml
 
@@ -673,8 +748,21 @@ def cameras_to_toml(cameras) -> str:
     OpenCV's calibration: ``cameras_to_toml([CalibratedCamera.from_opencv(K,
     dist, rvec, tvec, (w, h)), ...])``.
 
+    Parameters
+    ----------
+    cameras : iterable of CalibratedCamera
+        The cameras, in the order of their views.
+
+    Returns
+    -------
+    str
+        The TOML text, the tables separated by blank lines, ending in a
+        newline; empty for no cameras (a file :func:`load_cameras` refuses).
+
     Raises
     ------
+    TypeError
+        An item that is not a :class:`CalibratedCamera`.
     ValueError
         A camera with a skewed pixel grid (``matrix[0, 1] != 0``), which the
         file cannot hold.
@@ -769,10 +857,47 @@ def calibrated_grid_depth(
     go to each line's :func:`calibrated_row_depth` (the depths are the
     reference camera's, so one range serves both lines).
 
+    Parameters
+    ----------
+    row_views, column_views : sequence of 2-D arrays
+        Each line's grey images, each of its camera's size.
+    row_cameras, column_cameras : sequence of CalibratedCamera
+        One per view of the line, in the same order.
+    row_reference, column_reference : int
+        Index of the shared reference view in each line: the same camera
+        (an equal :class:`CalibratedCamera`) and the same image.
+    max_line_disagreement_px : float
+        Conflict threshold, px of disparity at the nearest neighbour spacing
+        (see above); > 0, ``inf`` for no limit.
+    depth_range : (float, float), optional
+        ``(near, far)`` in scene units along the reference camera's axis
+        (:func:`calibrated_row_depth`).
+    **stereo_options
+        As for :func:`calibrated_row_depth`.
+
+    Returns
+    -------
+    CalibratedGridDepth
+        ``depth`` and ``depth_std`` float32 of the reference camera's size,
+        in scene units.
+
     Raises
     ------
+    TypeError
+        A camera list that is not a sequence, a reference index that is not
+        an int, a ``max_line_disagreement_px`` that is not a number; what
+        :func:`calibrated_row_depth` refuses as such.
     ValueError
-        The two lines' reference cameras or images differ.
+        The two lines' reference cameras or images differ. Also a reference
+        index out of range, a ``max_line_disagreement_px`` that is not > 0,
+        and what :func:`calibrated_row_depth` refuses on either line.
+
+    Warns
+    -----
+    UserWarning
+        Those of :func:`calibrated_row_depth` on either line; and where the
+        two lines' depths differ by a median scale or mostly conflict (their
+        positions in two units?).
     """
     from .depth import Reason
     from .xy_stereo import _warn_if_axes_disagree, fuse_axes

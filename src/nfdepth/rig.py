@@ -265,6 +265,34 @@ def load_poses(path) -> Poses:
     ``x, y, z`` the camera's optical centre in world coordinates (scene
     units); ``rx, ry, rz`` its camera-to-world orientation as a rotation
     vector in degrees. Raises :class:`RigError` naming the line and column.
+    Blank lines and lines starting with ``#`` are skipped; the header is
+    read case-insensitively.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file, UTF-8 (a byte-order mark is allowed).
+
+    Returns
+    -------
+    Poses
+        One entry per data row, in file order; ``rotations_deg`` zeros
+        without ``rx, ry, rz`` columns; ``source`` the path read.
+
+    Raises
+    ------
+    TypeError
+        If ``path`` is not a str or os.PathLike.
+    FileNotFoundError
+        If the file does not exist or is a directory.
+    nfdepth.io.InputReadError
+        If it cannot be read (e.g. no read permission).
+    RigError
+        A file that is not UTF-8 text or is empty, a header other than
+        ``frame,x,y,z[,rx,ry,rz]``, no data rows, a row with another number
+        of columns, a frame that is not a whole number >= 0 or not strictly
+        increasing, a value that is not a finite number, or an orientation
+        of more than :data:`MAX_TURN_DEG` (1e6) degrees.
     """
     path = as_path("path", path)
     if not path.is_file():
@@ -819,12 +847,29 @@ def _read_toml(path, kind: str) -> tuple[Path, dict]:
 def load_rig(path) -> Rig:
     """Read and validate a rig TOML file.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The rig file, UTF-8 TOML (``docs/rig-format.md``); a relative
+        ``video.poses`` path in it is read from the file's folder.
+
+    Returns
+    -------
+    Rig
+        With :attr:`Rig.source` set to ``path`` (as a Path).
+
     Raises
     ------
+    TypeError
+        If ``path`` is not a str or os.PathLike.
     FileNotFoundError
-        If the file does not exist.
+        If the file does not exist (or is a directory); also for a missing
+        ``video.poses`` CSV (:func:`load_poses`).
+    nfdepth.io.InputReadError
+        If the file or its poses CSV cannot be read (e.g. no read permission).
     RigError
         For invalid TOML or an invalid rig; the message starts with the file name.
+        Also a file that is not UTF-8, and an invalid poses CSV.
     """
     path, data = _read_toml(path, "rig")
     try:
@@ -852,6 +897,22 @@ def rig_to_toml(rig: Rig) -> str:
     """TOML text of ``rig``; :func:`rig_from_dict` of its parse gives back an equal rig.
 
     A ``video.poses`` section is written as the absolute path of its CSV.
+    The round trip holds for the rigs :func:`rig_from_dict` builds; a rig built by
+    hand may hold what a file cannot (``VideoSpec.orientations_deg``, which
+    is not written; a ``StereoSpec.direction`` that is not a unit vector,
+    which reads back normalised).
+
+    Parameters
+    ----------
+    rig : Rig
+        E.g. from :func:`load_rig` or :func:`rig_from_dict`.
+
+    Returns
+    -------
+    str
+        ``[camera]`` (with its principal point ``cx_px``, ``cy_px``), then
+        ``[motion]``, ``[stereo]`` and ``[video]`` where the rig has them,
+        ending in a newline. :attr:`Rig.source` is not written.
     """
     cam = rig.camera
     lines = ["[camera]", f"focal_px = {_toml_value(cam.focal_px)}", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
@@ -895,19 +956,36 @@ def rig_to_toml(rig: Rig) -> str:
 def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_views: int | None = None) -> dict:
     """Options of ``nfdepth stereo`` from ``[camera]`` and ``[stereo]``.
 
-    Returns ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
-    column_positions=list|None, disparity_range_px=list|None,
-    disparity_offset_px=float, cx_px=float, cy_px=float)`` (the principal
-    point is the camera's, the image centre where the file gives none).
     :func:`nfdepth.stereo.static_stereo` handles rows along +x or +y only, so
     a ``direction`` must be one of those.
 
-    ``n_views`` / ``n_column_views``, when given, are the numbers of views of
-    the row / column the options are for: ``stereo.positions`` /
-    ``stereo.column_positions`` must then hold one entry per view.
+    Parameters
+    ----------
+    rig : Rig
+        A rig with a ``[stereo]`` section.
+    n_views, n_column_views : int, optional
+        ``n_views`` / ``n_column_views``, when given, are the numbers of views of
+        the row / column the options are for: ``stereo.positions`` /
+        ``stereo.column_positions`` must then hold one entry per view.
 
-    Raises :class:`RigError` (starting ``rig 'FILE':`` when the rig was read
-    from a file) naming the key, its value and what was expected.
+    Returns
+    -------
+    dict
+        ``dict(focal_px=..., baseline=..., axis="x"|"y", positions=list|None,
+        column_positions=list|None, disparity_range_px=list|None,
+        disparity_offset_px=float, cx_px=float, cy_px=float)`` (the principal
+        point is the camera's, the image centre where the file gives none).
+        ``focal_px``, ``cx_px``, ``cy_px`` in px; ``baseline`` in scene units;
+        positions in units of the baseline; ``disparity_range_px`` and
+        ``disparity_offset_px`` in px per unit position.
+
+    Raises
+    ------
+    RigError
+        (starting ``rig 'FILE':`` when the rig was read from a file) naming
+        the key, its value and what was expected: a ``stereo.direction`` other
+        than ``[1, 0, 0]`` or ``[0, 1, 0]``, or positions whose count is not
+        ``n_views`` / ``n_column_views``. Also for a rig without ``[stereo]``.
     """
     s = rig._need("stereo")
     where = f"rig '{rig.source}': " if rig.source is not None else ""
@@ -964,6 +1042,32 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
     one the rig gives (``camera``, ``relative_motion``, ``frame_interval``) or
     an unknown name is a ``TypeError`` that says so.
     This is the library form of ``nfdepth dynamic``.
+
+    Parameters
+    ----------
+    frames : iterable of 5 array_like, shape (H, W)
+        Grey images ``I1 .. I5`` of ``[camera]``'s size (``height_px`` rows,
+        ``width_px`` columns).
+    rig : Rig
+        A rig with a ``[motion]`` section.
+    **options
+        Further keyword arguments of :func:`~nfdepth.pipelines.dynamic_stereo`.
+
+    Returns
+    -------
+    nfdepth.pipelines.EdgeDepth
+        As :func:`~nfdepth.pipelines.dynamic_stereo` returns it, on the
+        undistorted pixel grid; depth in the scene units of ``motion.velocity``.
+
+    Raises
+    ------
+    TypeError
+        An option the rig gives or an unknown option.
+    ValueError
+        Not exactly 5 frames, or frames that
+        :func:`~nfdepth.pipelines.dynamic_stereo` refuses.
+    RigError
+        A frame whose size is not ``[camera]``'s, or a rig without ``[motion]``.
     """
     from .pipelines import dynamic_stereo
 

@@ -586,6 +586,27 @@ def check_depth_scale(focal_px, baseline, *, names=("focal_px", "baseline")) -> 
     lengths and focal lengths (depths are written as float32; beyond that
     range they overflow or vanish). ``names`` name them in the messages
     (the CLI's ``--focal-px``, ``--baseline``).
+
+    Parameters
+    ----------
+    focal_px : float
+        Focal length in pixels.
+    baseline : float
+        Camera spacing per unit of position (scene units).
+    names : (str, str)
+        Their names in the error messages.
+
+    Returns
+    -------
+    (float, float)
+        ``(focal_px, baseline)`` as floats.
+
+    Raises
+    ------
+    TypeError
+        A value that is not a number (also a str, bool or complex).
+    ValueError
+        A value that is not finite and > 0, or lies outside 1e-30..1e30.
     """
     advice = "give it in a unit that keeps it there (depths are written as float32)"
     f, b = (check_within(name, value, advice=advice) for name, value in zip(names, (focal_px, baseline)))
@@ -600,6 +621,33 @@ def disparity_range_for_depths(depth_range, *, focal_px: float, baseline: float,
     ``depth_range`` is ``(near, far)`` in the unit of ``baseline``, ``0 <
     near < far``; ``far`` may be ``inf`` (points at infinity: disparity
     ``-offset``).
+
+    Parameters
+    ----------
+    depth_range : (float, float)
+        ``(near, far)``, ``0 < near < far``, ``near`` finite.
+    focal_px : float
+        Focal length in pixels (checked as by :func:`check_depth_scale`).
+    baseline : float
+        Camera spacing per unit of position, scene units (as ``focal_px``).
+    disparity_offset_px : float
+        The ``disparity_offset_px`` of :meth:`StereoResult.depth`, px per
+        unit of position, within +-1e6 px.
+
+    Returns
+    -------
+    (float, float)
+        ``(smallest, largest)`` disparity, px per unit of position.
+
+    Raises
+    ------
+    TypeError
+        A ``depth_range`` that is not two numbers; a ``focal_px``,
+        ``baseline`` or ``disparity_offset_px`` that is not a number.
+    ValueError
+        A ``depth_range`` not ``0 < near < far`` or whose ``near`` is too
+        near for a finite disparity; a ``focal_px`` or ``baseline`` that
+        :func:`check_depth_scale` refuses; an offset beyond +-1e6 px or not finite.
     """
     near, far = check_depth_range("depth_range", depth_range)
     f, b = check_depth_scale(focal_px, baseline)
@@ -672,7 +720,29 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
 
 
 def auto_levels(shape, *, min_size_px: int = 24) -> int:
-    """Pyramid levels for an image of ``shape`` ``(rows, cols)``: halve until the smaller side would drop below ``min_size_px``."""
+    """Pyramid levels for an image of ``shape`` ``(rows, cols)``: halve until the smaller side would drop below ``min_size_px``.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        Image ``(rows, cols)``, each >= 1.
+    min_size_px : int
+        Smallest side (px) a level may have; >= 1 (not checked: with 0 or
+        less the halving never stops).
+
+    Returns
+    -------
+    int
+        The number of levels, >= 1 (1 when the smaller side is below
+        ``2 * min_size_px``).
+
+    Raises
+    ------
+    TypeError
+        If ``shape`` is not a pair whose items ``int()`` takes.
+    ValueError
+        If a side is below 1.
+    """
     side = min(check_shape_rows_cols(shape))
     levels = 1
     while side // 2 >= min_size_px:
