@@ -1,5 +1,7 @@
 """Camera and motion model (paper eq. 1, 3, 4) against hand-derived values."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -215,6 +217,7 @@ def test_camera_functions_refuse_complex_text_and_wrong_motions():
     import nfdepth
     from nfdepth.camera import (
         image_flow,
+        image_flow_px,
         normal_flow_px,
         relative_normal_flow_coefficients,
     )
@@ -237,7 +240,24 @@ def test_camera_functions_refuse_complex_text_and_wrong_motions():
     res = solve_inverse_depth([1.0], camera=cam, rows=[np.nan], cols=[1.0], alpha=[0.0], relative_motion=RigidMotion((1, 0, 0)))
     assert res.reason.tolist() == [Reason.NO_DATA]
     assert nfdepth.stereo.auto_levels((480, 640)) == 5
-    with pytest.raises(TypeError, match=r"^shape must be \(rows, cols\), got 480$"):
-        nfdepth.stereo.auto_levels(480)
+    for shape in (480, (2.7, 30), ("30", 30), (30,)):
+        with pytest.raises(TypeError, match=rf"^shape must be \(rows, cols\) of integers, got {re.escape(repr(shape))}$"):
+            nfdepth.stereo.auto_levels(shape)
     with pytest.raises(ValueError, match=r"^shape must be positive"):
         nfdepth.stereo.auto_levels((-4, 5))
+    # a smallest side below 1 would halve for ever
+    for size in (0, -3):
+        with pytest.raises(ValueError, match=rf"^min_size_px must be an integer >= 1, got {size}$"):
+            nfdepth.stereo.auto_levels((480, 640), min_size_px=size)
+    # every flow of the camera model names a camera that is none
+    for fn, args in (
+        (image_flow_px, ("cam", 1.0, 1.0, 1.0, RigidMotion((1, 0, 0)))),
+        (normal_flow_px, (None, 1.0, 1.0, 1.0, 0.0, RigidMotion((1, 0, 0)))),
+        (relative_normal_flow_coefficients, (3, 1.0, 1.0, 0.0, RigidMotion((1, 0, 0)))),
+    ):
+        with pytest.raises(TypeError, match=r"^camera must be a nfdepth.PinholeCamera, got "):
+            fn(*args)
+    # depth 0: an infinite flow (inf or NaN where a term is inf * 0), no NumPy warning
+    fu, fv = image_flow_px(cam, [1.0, 5.0], [1.0, 5.0], [0.0, 0.0], RigidMotion((1, 0, 0)))
+    assert not np.isfinite(fu).any() and not np.isfinite(fv).any()
+    assert not np.isfinite(normal_flow_px(cam, 1.0, 1.0, 0.0, 0.5, RigidMotion((1, 0, 0))))

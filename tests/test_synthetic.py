@@ -361,7 +361,7 @@ def test_polygon_coverage_bad_input_and_empty_cases():
         with pytest.raises(ValueError) as info:
             polygon_coverage(bad, (8, 8))
         assert str(info.value) == message
-    with pytest.raises(TypeError, match=r"^shape must be \(rows, cols\), got 8$"):
+    with pytest.raises(TypeError, match=r"^shape must be \(rows, cols\) of integers, got 8$"):
         polygon_coverage(tri, 8)
     with pytest.raises(ValueError, match=r"^shape must be positive, got \(0, 8\)$"):
         polygon_coverage(tri, (0, 8))

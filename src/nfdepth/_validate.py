@@ -392,11 +392,11 @@ def is_real_numeric(arr: np.ndarray) -> bool:
 
 
 def check_shape_rows_cols(shape) -> tuple[int, int]:
-    """``shape`` as two positive ints ``(rows, cols)``: TypeError if it is no pair of integers, ValueError below 1."""
+    """``shape`` as two positive ints ``(rows, cols)``: TypeError if it is no pair of integers (floats and text too), ValueError below 1."""
     try:
-        rows, cols = (int(s) for s in shape)
+        rows, cols = (_as_int("shape", s, "(rows, cols) of integers") for s in shape)
     except (TypeError, ValueError):
-        msg = f"shape must be (rows, cols), got {shape!r}"
+        msg = f"shape must be (rows, cols) of integers, got {shape!r}"
         raise TypeError(msg) from None
     if rows < 1 or cols < 1:
         msg = f"shape must be positive, got {shape!r}"

@@ -83,6 +83,13 @@ def _motion(name: str, motion) -> RigidMotion:
     return motion
 
 
+def _camera(name: str, camera) -> PinholeCamera:
+    if not isinstance(camera, PinholeCamera):
+        msg = f"{name} must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
+        raise TypeError(msg)
+    return camera
+
+
 def _magnitude(vec) -> float:
     """Euclidean norm of a finite vector without overflow or underflow (inf where it exceeds the float range).
 
@@ -346,13 +353,13 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
     Raises
     ------
     TypeError
-        ``motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols`` or ``depth`` is
-        not real numbers (complex, text, objects).
+        ``camera`` is not a :class:`PinholeCamera`, ``motion`` not a :class:`RigidMotion`,
+        or ``rows``, ``cols`` or ``depth`` is not real numbers (complex, text, objects).
     """
-    x, y = camera.to_normalized(rows, cols)
-    with np.errstate(divide="ignore"):
+    x, y = _camera("camera", camera).to_normalized(rows, cols)
+    with np.errstate(divide="ignore", invalid="ignore"):  # depth 0: infinite flow, NaN where a term is inf * 0
         rho = 1.0 / _real("depth", depth)
-    u, v = image_flow(x, y, rho, motion)
+        u, v = image_flow(x, y, rho, motion)
     return camera.focal_px * u, camera.focal_px * v
 
 
@@ -383,8 +390,9 @@ def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: Rigi
     Raises
     ------
     TypeError
-        ``motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols``, ``depth`` or
-        ``alpha`` is not real numbers (complex, text, objects).
+        ``camera`` is not a :class:`PinholeCamera`, ``motion`` not a :class:`RigidMotion`,
+        or ``rows``, ``cols``, ``depth`` or ``alpha`` is not real numbers (complex, text,
+        objects).
 
     Examples
     --------
@@ -398,7 +406,8 @@ def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: Rigi
     """
     fu, fv = image_flow_px(camera, rows, cols, depth, motion)
     alpha = _real("alpha", alpha)
-    return fu * np.cos(alpha) + fv * np.sin(alpha)
+    with np.errstate(invalid="ignore"):  # an infinite flow (depth 0) across its normal: NaN
+        return fu * np.cos(alpha) + fv * np.sin(alpha)
 
 
 def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, relative_motion: RigidMotion):
@@ -436,11 +445,12 @@ def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, 
     Raises
     ------
     TypeError
-        ``relative_motion`` is not a :class:`RigidMotion`, or ``rows``, ``cols`` or
-        ``alpha`` is not real numbers (complex, text, objects).
+        ``camera`` is not a :class:`PinholeCamera`, ``relative_motion`` not a
+        :class:`RigidMotion`, or ``rows``, ``cols`` or ``alpha`` is not real numbers
+        (complex, text, objects).
     """
     relative_motion = _motion("relative_motion", relative_motion)
-    x, y = camera.to_normalized(rows, cols)
+    x, y = _camera("camera", camera).to_normalized(rows, cols)
     alpha = _real("alpha", alpha)
     c, s = np.cos(alpha), np.sin(alpha)
     ur, vr = _rotational_flow(x, y, relative_motion.rotation)

@@ -31,7 +31,13 @@ from ._validate import (
     check_nonzero_finite,
     check_positive_finite,
 )
-from .camera import PinholeCamera, RigidMotion, _real, relative_normal_flow_coefficients
+from .camera import (
+    PinholeCamera,
+    RigidMotion,
+    _camera,
+    _real,
+    relative_normal_flow_coefficients,
+)
 
 __all__ = [
     "Reason",
@@ -137,9 +143,7 @@ def solve_inverse_depth(
     -------
     InverseDepth
     """
-    if not isinstance(camera, PinholeCamera):
-        msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
-        raise TypeError(msg)
+    camera = _camera("camera", camera)
     if not isinstance(relative_motion, RigidMotion):
         msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
         raise TypeError(msg)
@@ -318,9 +322,7 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
     ValueError
         ``delta_vz`` is 0 or not finite.
     """
-    if not isinstance(camera, PinholeCamera):
-        msg = f"camera must be a nfdepth.PinholeCamera, got {type(camera).__name__}"
-        raise TypeError(msg)
+    camera = _camera("camera", camera)
     delta_vz = check_nonzero_finite("delta_vz", delta_vz, what="a non-zero finite translation")
     x, y = camera.to_normalized(rows, cols)
     return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)

@@ -727,8 +727,7 @@ def auto_levels(shape, *, min_size_px: int = 24) -> int:
     shape : (int, int)
         Image ``(rows, cols)``, each >= 1.
     min_size_px : int
-        Smallest side (px) a level may have; >= 1 (not checked: with 0 or
-        less the halving never stops).
+        Smallest side (px) a level may have, >= 1.
 
     Returns
     -------
@@ -739,11 +738,12 @@ def auto_levels(shape, *, min_size_px: int = 24) -> int:
     Raises
     ------
     TypeError
-        If ``shape`` is not a pair whose items ``int()`` takes.
+        If ``shape`` is not a pair of integers, or ``min_size_px`` not an integer.
     ValueError
-        If a side is below 1.
+        If a side or ``min_size_px`` is below 1.
     """
     side = min(check_shape_rows_cols(shape))
+    min_size_px = check_int("min_size_px", min_size_px, 1)
     levels = 1
     while side // 2 >= min_size_px:
         side //= 2
