@@ -41,6 +41,16 @@ def test_rig_distortion_is_read_written_and_checked():
     assert np.array_equal(plain.undistort(frame), frame)
     with pytest.raises(RigError, match="does not match the image"):
         rig.undistort(np.zeros((10, 10)))
+    # colour: told as without distortion (it was OpenCV's "invalid shape for coordinate array")
+    colour = np.zeros((200, 200, 3), np.float32)
+    with pytest.raises(ValueError, match=r"^image must be a 2-D grey image \(rows, cols\), got shape \(200, 200, 3\); convert colour"):
+        rig.undistort(colour)
+    from nfdepth.rig import dynamic_stereo_from_rig
+
+    motion = "[motion]\nvelocity = [1.0, 0.0, 0.0]\n"
+    for r in (_rig(sections=motion), _rig(distortion=(), sections=motion)):
+        with pytest.raises(ValueError, match=r"^frames\[0\] must be a 2-D grey image \(rows, cols\), got shape \(200, 200, 3\); convert colour"):
+            dynamic_stereo_from_rig([colour] * 5, r)
 
 
 def test_undistort_recovers_the_pinhole_view():

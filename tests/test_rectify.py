@@ -1,5 +1,6 @@
 """A calibrated row of cameras that is not rectified: rectification, depth in the reference's own pixels."""
 
+import re
 import warnings
 
 import cv2
@@ -279,6 +280,13 @@ def test_cameras_file_values_are_checked(tmp_path):
             cameras_from_dict({"camera": [{**good, **change}]})
     with pytest.raises(RigError, match=r"camera is missing: expected one \[\[camera\]\] table per view"):
         cameras_from_dict({"camera": []})
+    # [camera] for [[camera]], the likeliest slip in a hand-written file, was "camera is missing"
+    single = tmp_path / "single.toml"
+    single.write_text("[camera]\nfocal_px = 400.0\nwidth_px = 180\nheight_px = 120\nposition = [0.0, 0.0, 0.0]\n")
+    with pytest.raises(RigError, match=rf"^cameras '{re.escape(str(single))}': camera is a single \[camera\] table: expected one \[\[camera\]\] table \(double brackets\) per view"):
+        load_cameras(single)
+    with pytest.raises(RigError, match=r"^camera = 3: expected one \[\[camera\]\] table per view"):
+        cameras_from_dict({"camera": 3})
     with pytest.raises(RigError, match=r"camera\[0\]: expected one of focal_px, fx_px"):
         cameras_from_dict({"camera": [{"width_px": 180, "height_px": 120, "position": [0.0, 0.0, 0.0]}]})
     bad = tmp_path / "c.toml"

@@ -93,6 +93,29 @@ def test_round_trip_examples(path):
     assert again == rig
 
 
+def test_a_rig_file_refuses_what_it_cannot_hold():
+    """Per-frame orientations given in code (depth_from_video's orientations_rad) and poses not read from a file
+    have no place in a rig file: writing the rest would read back as a rig that does not turn (it was dropped
+    without a word) or fail on a bare assert."""
+    import dataclasses
+
+    from nfdepth.rig import Poses, VideoSpec
+
+    rig = rig_from_dict(copy.deepcopy(BASE))
+    positions = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]])
+    turning = dataclasses.replace(rig, video=VideoSpec(positions=positions, orientations_deg=np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.0]])))
+    with pytest.raises(ValueError, match=r"^rig.video has per-frame orientations \(orientations_deg\), which a rig file cannot hold: .* video.poses$"):
+        rig_to_toml(turning)
+    # orientations of zero are the file's own default: written as positions, they read back the same motion
+    still = dataclasses.replace(rig, video=VideoSpec(positions=positions, orientations_deg=np.zeros((3, 3))))
+    again = rig_from_dict(tomllib.loads(rig_to_toml(still)))
+    np.testing.assert_array_equal(again.video.positions, positions)
+    assert np.all(again.video.orientation_deg(2) == 0)
+    unsaved = dataclasses.replace(rig, video=VideoSpec(poses=Poses(np.arange(3), positions, np.zeros((3, 3)))))
+    with pytest.raises(ValueError, match=r"^rig.video has poses that were not read from a file"):
+        rig_to_toml(unsaved)
+
+
 def test_round_trip_all_sections(tmp_path):
     d = copy.deepcopy(BASE)
     d["camera"].update(cx_px=101.25, cy_px=98.0)

@@ -691,7 +691,11 @@ def cameras_from_dict(data: dict) -> list:
         raise RigError(f"cameras: expected a table with a [[camera]] array, got {type(data).__name__}")
     _check_keys(data, "cameras", ("camera",))
     tables = data.get("camera")
-    if not isinstance(tables, list) or not tables:
+    if isinstance(tables, dict):  # [camera] written for [[camera]]
+        raise RigError("camera is a single [camera] table: expected one [[camera]] table (double brackets) per view, in the order of the views")
+    if tables is not None and not isinstance(tables, list):
+        raise RigError(f"camera = {tables!r}: expected one [[camera]] table per view, in the order of the views")
+    if not tables:
         raise RigError("camera is missing: expected one [[camera]] table per view, in the order of the views")
     cameras = []
     for k, table in enumerate(tables):

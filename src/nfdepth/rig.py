@@ -55,6 +55,7 @@ from ._validate import (
     DISPARITY_OFFSET_EXPECTED,
     UNIT_SCALE_RANGE,
     NFDepthError,
+    as_image,
     as_path,
     check_disparity_offset,
 )
@@ -545,6 +546,9 @@ class Rig:
         img = np.asarray(image, dtype=np.float32)
         if not any(self.distortion):
             return img
+        if img.ndim != 2:
+            msg = f"image must be a 2-D grey image (rows, cols), got shape {img.shape}" + ("; convert colour to grey first (nfdepth.io.to_grey)" if img.ndim == 3 else "")
+            raise ValueError(msg)
         self.check_image_shape(img.shape, what="the image")
         maps = self.__dict__.get("_undistort_maps")
         if maps is None:
@@ -898,9 +902,9 @@ def rig_to_toml(rig: Rig) -> str:
 
     A ``video.poses`` section is written as the absolute path of its CSV.
     The round trip holds for the rigs :func:`rig_from_dict` builds; a rig built by
-    hand may hold what a file cannot (``VideoSpec.orientations_deg``, which
-    is not written; a ``StereoSpec.direction`` that is not a unit vector,
-    which reads back normalised).
+    hand may hold what a file cannot: ``VideoSpec.orientations_deg`` is
+    refused (a file gives turning frames as ``video.poses``), and a
+    ``StereoSpec.direction`` that is not a unit vector reads back normalised.
 
     Parameters
     ----------
@@ -913,7 +917,24 @@ def rig_to_toml(rig: Rig) -> str:
         ``[camera]`` (with its principal point ``cx_px``, ``cy_px``), then
         ``[motion]``, ``[stereo]`` and ``[video]`` where the rig has them,
         ending in a newline. :attr:`Rig.source` is not written.
+
+    Raises
+    ------
+    ValueError
+        A video with per-frame orientations (``VideoSpec.orientations_deg``
+        not all zero), or with poses that were not read from a file: a rig
+        file cannot hold them.
     """
+    video = rig.video
+    if video is not None and video.orientations_deg is not None and np.any(video.orientations_deg != 0):
+        msg = (
+            "rig.video has per-frame orientations (orientations_deg), which a rig file cannot hold:"
+            " write positions and orientations as a poses CSV (frame,x,y,z,rx,ry,rz in degrees) and give it as video.poses"
+        )
+        raise ValueError(msg)
+    if video is not None and video.velocity is None and video.positions is None and (video.poses is None or video.poses.source is None):
+        msg = "rig.video has poses that were not read from a file: a rig file names the poses CSV (video.poses), so save them as one first"
+        raise ValueError(msg)
     cam = rig.camera
     lines = ["[camera]", f"focal_px = {_toml_value(cam.focal_px)}", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
     lines += [f"cx_px = {_toml_value(cam.cx_px)}", f"cy_px = {_toml_value(cam.cy_px)}"]
@@ -945,7 +966,6 @@ def rig_to_toml(rig: Rig) -> str:
         elif v.positions is not None:
             lines.append(f"positions = {_toml_value([list(p) for p in v.positions])}")
         else:
-            assert v.poses is not None and v.poses.source is not None
             lines.append(f"poses = {_toml_value(str(Path(v.poses.source).resolve()))}")
     return "\n".join(lines) + "\n"
 
@@ -1077,8 +1097,8 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
         raise ValueError(f"dynamic stereo needs exactly 5 images I1..I5, got {len(frames)}")
     for k, f in enumerate(frames, 1):
         rig.check_image_shape(np.shape(f), what=f"image I{k}")
-    if any(rig.distortion):
-        frames = [rig.undistort(f) for f in frames]
+    if any(rig.distortion):  # checked as dynamic_stereo checks them: the undistortion reads grey images only
+        frames = [rig.undistort(as_image(f"frames[{k}]", f)) for k, f in enumerate(frames)]
     return dynamic_stereo(frames, camera=rig.camera, relative_motion=rig.relative_motion(), frame_interval=rig.frame_interval, **options)
 
 
