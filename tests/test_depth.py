@@ -121,6 +121,23 @@ def test_bad_special_case_input():
         solve_inverse_depth([1.0], camera=CAM, rows=[1], cols=[1], alpha=[0], relative_motion=RigidMotion((1, 0, 0)), min_cos=2)
     with pytest.raises(TypeError, match=r"^camera must be a nfdepth.PinholeCamera, got dict$"):
         depth_z_translation(0.5, 0.0, camera={"focal_px": 120.0}, rows=[1.0], cols=[1.0], delta_vz=1.0)
+    # a complex direction or flow lost its imaginary part with only a ComplexWarning
+    with pytest.raises(TypeError, match=r"^alpha must be real numbers, got dtype complex128$"):
+        depth_x_translation(0.5, [0.1j], focal_px=100, delta_vx=1.0)
+    with pytest.raises(TypeError, match=r"^alpha must be real numbers, got dtype <U3$"):
+        depth_y_translation(0.5, ["0.1"], focal_px=100, delta_vy=1.0)
+    with pytest.raises(TypeError, match=r"^alpha must be real numbers, got dtype complex128$"):
+        depth_z_translation(0.5, 1j, camera=CAM, rows=[1.0], cols=[1.0], delta_vz=1.0)
+    for name in ("delta_vn", "a", "b"):
+        args = {"delta_vn": [1.0, 2.0], "a": [0.0, 0.0], "b": [1.0, 1.0]}
+        args[name] = [1.0, 1j] if name != "b" else ["1", "2"]
+        with pytest.raises(TypeError, match=rf"^{name} must be real numbers, got dtype "):
+            fuse_inverse_depth(args["delta_vn"], args["a"], args["b"], [0.1, 0.1])
+    from nfdepth.edges import block_structure_tensor, corner_ratio
+
+    for fn in (block_structure_tensor, corner_ratio):
+        with pytest.raises(TypeError, match=r"^grad_row must be real numbers, got dtype complex128$"):
+            fn(np.ones((6, 6)), np.ones((6, 6)) * 1j, window_sigma_px=1.0)
 
 
 def test_uncertainty_bound_marks_uncertain():

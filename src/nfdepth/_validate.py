@@ -391,6 +391,15 @@ def is_real_numeric(arr: np.ndarray) -> bool:
     return arr.dtype != object and not np.iscomplexobj(arr) and (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool)
 
 
+def as_real(name: str, values) -> np.ndarray:
+    """``values`` as a float64 array; complex, text or objects refused with a TypeError (NumPy would drop an imaginary part with a warning)."""
+    arr = np.asarray(values)
+    if not is_real_numeric(arr):
+        msg = f"{name} must be real numbers, got dtype {arr.dtype}"
+        raise TypeError(msg)
+    return arr.astype(float, copy=False)
+
+
 def check_shape_rows_cols(shape) -> tuple[int, int]:
     """``shape`` as two positive ints ``(rows, cols)``: TypeError if it is no pair of integers (floats and text too), ValueError below 1."""
     try:

@@ -18,12 +18,12 @@ import numpy as np
 
 from ._validate import (
     UNIT_SCALE_RANGE,
+    as_real,
     as_vector3,
     check_finite,
     check_image_size,
     check_positive_finite,
     check_within,
-    is_real_numeric,
 )
 
 __all__ = [
@@ -65,15 +65,6 @@ def _principal_point_expected(centre: float, reach: float) -> str:
 #: between two images cannot be told from a smaller one the other way; the
 #: small-motion method needs a few degrees per frame at most.
 MAX_ROTATION_PER_FRAME_DEG = 90.0
-
-
-def _real(name: str, values) -> np.ndarray:
-    """``values`` as a float array; complex, text or objects refused (NumPy would drop an imaginary part with a warning)."""
-    arr = np.asarray(values)
-    if not is_real_numeric(arr):
-        msg = f"{name} must be real numbers, got dtype {arr.dtype}"
-        raise TypeError(msg)
-    return arr.astype(float, copy=False)
 
 
 def _motion(name: str, motion) -> RigidMotion:
@@ -174,14 +165,14 @@ class PinholeCamera:
 
     def to_normalized(self, rows, cols):
         """Pixel ``(row, col)`` to normalised image coordinates ``(x, y)``."""
-        x = (_real("cols", cols) - self.cx_px) / self.focal_px
-        y = (_real("rows", rows) - self.cy_px) / self.focal_px
+        x = (as_real("cols", cols) - self.cx_px) / self.focal_px
+        y = (as_real("rows", rows) - self.cy_px) / self.focal_px
         return x, y
 
     def to_pixel(self, x, y):
         """Normalised ``(x, y)`` to pixel ``(row, col)``."""
-        rows = self.cy_px + self.focal_px * _real("y", y)
-        cols = self.cx_px + self.focal_px * _real("x", x)
+        rows = self.cy_px + self.focal_px * as_real("y", y)
+        cols = self.cx_px + self.focal_px * as_real("x", x)
         return rows, cols
 
     def project(self, points):
@@ -190,7 +181,7 @@ class PinholeCamera:
         Points at ``Z <= 0`` (at or behind the camera) are projected all the
         same (through the centre, or to inf at 0): test ``Z > 0`` where it matters.
         """
-        points = _real("points", points)
+        points = as_real("points", points)
         if points.shape[-1] != 3:
             msg = f"points must have shape (..., 3), got {points.shape}"
             raise ValueError(msg)
@@ -201,7 +192,7 @@ class PinholeCamera:
     def back_project(self, rows, cols, depth):
         """Pixel positions and depth Z to camera-frame points, shape ``(..., 3)``."""
         x, y = self.to_normalized(rows, cols)
-        depth = _real("depth", depth)
+        depth = as_real("depth", depth)
         return np.stack(np.broadcast_arrays(x * depth, y * depth, depth), axis=-1)
 
 
@@ -318,7 +309,7 @@ def image_flow(x, y, inverse_depth, motion: RigidMotion):
         The three do not broadcast together (NumPy's error).
     """
     motion = _motion("motion", motion)
-    x, y, rho = _real("x", x), _real("y", y), _real("inverse_depth", inverse_depth)
+    x, y, rho = as_real("x", x), as_real("y", y), as_real("inverse_depth", inverse_depth)
     vx, vy, vz = motion.translation
     ur, vr = _rotational_flow(x, y, motion.rotation)
     return ur + (vx - x * vz) * rho, vr + (vy - y * vz) * rho
@@ -358,7 +349,7 @@ def image_flow_px(camera: PinholeCamera, rows, cols, depth, motion: RigidMotion)
     """
     x, y = _camera("camera", camera).to_normalized(rows, cols)
     with np.errstate(divide="ignore", invalid="ignore"):  # depth 0: infinite flow, NaN where a term is inf * 0
-        rho = 1.0 / _real("depth", depth)
+        rho = 1.0 / as_real("depth", depth)
         u, v = image_flow(x, y, rho, motion)
     return camera.focal_px * u, camera.focal_px * v
 
@@ -405,7 +396,7 @@ def normal_flow_px(camera: PinholeCamera, rows, cols, depth, alpha, motion: Rigi
     -0.5
     """
     fu, fv = image_flow_px(camera, rows, cols, depth, motion)
-    alpha = _real("alpha", alpha)
+    alpha = as_real("alpha", alpha)
     with np.errstate(invalid="ignore"):  # an infinite flow (depth 0) across its normal: NaN
         return fu * np.cos(alpha) + fv * np.sin(alpha)
 
@@ -451,7 +442,7 @@ def relative_normal_flow_coefficients(camera: PinholeCamera, rows, cols, alpha, 
     """
     relative_motion = _motion("relative_motion", relative_motion)
     x, y = _camera("camera", camera).to_normalized(rows, cols)
-    alpha = _real("alpha", alpha)
+    alpha = as_real("alpha", alpha)
     c, s = np.cos(alpha), np.sin(alpha)
     ur, vr = _rotational_flow(x, y, relative_motion.rotation)
     vx, vy, vz = relative_motion.translation

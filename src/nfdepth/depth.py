@@ -26,6 +26,7 @@ from enum import IntEnum
 import numpy as np
 
 from ._validate import (
+    as_real,
     check_fraction,
     check_nonnegative_finite,
     check_nonzero_finite,
@@ -35,7 +36,6 @@ from .camera import (
     PinholeCamera,
     RigidMotion,
     _camera,
-    _real,
     relative_normal_flow_coefficients,
 )
 
@@ -148,8 +148,8 @@ def solve_inverse_depth(
         msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
         raise TypeError(msg)
     min_cos = check_fraction("min_cos", min_cos)
-    dvn = _real("delta_vn", delta_vn)
-    alpha = _real("alpha", alpha)
+    dvn = as_real("delta_vn", delta_vn)
+    alpha = as_real("alpha", alpha)
     a, b = relative_normal_flow_coefficients(camera, rows, cols, alpha, relative_motion)
     x, y = camera.to_normalized(rows, cols)
     vx, vy, vz = relative_motion.translation
@@ -185,7 +185,7 @@ def solve_inverse_depth(
 
 
 def _special_case(numerator, delta_vn):
-    dvn = _real("delta_vn", delta_vn)
+    dvn = as_real("delta_vn", delta_vn)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.asarray(numerator, dtype=float) / dvn
     return np.where((z > 0) & np.isfinite(z), z, np.nan)  # dVn = 0 (at infinity) is no depth either
@@ -225,7 +225,7 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
     ------
     TypeError
         ``focal_px`` or ``delta_vx`` is not a number (a str or bool too), or
-        ``delta_vn`` is not real numbers (complex, text, objects).
+        ``delta_vn`` or ``alpha`` is not real numbers (complex, text, objects).
     ValueError
         ``focal_px`` is not positive and finite, ``delta_vx`` is 0 or not finite.
 
@@ -238,7 +238,7 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
     """
     f = check_positive_finite("focal_px", focal_px)
     delta_vx = check_nonzero_finite("delta_vx", delta_vx, what="a non-zero finite translation")
-    return _special_case(f * delta_vx * np.cos(alpha), delta_vn)
+    return _special_case(f * delta_vx * np.cos(as_real("alpha", alpha)), delta_vn)
 
 
 def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
@@ -272,13 +272,13 @@ def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
     ------
     TypeError
         ``focal_px`` or ``delta_vy`` is not a number (a str or bool too), or
-        ``delta_vn`` is not real numbers (complex, text, objects).
+        ``delta_vn`` or ``alpha`` is not real numbers (complex, text, objects).
     ValueError
         ``focal_px`` is not positive and finite, ``delta_vy`` is 0 or not finite.
     """
     f = check_positive_finite("focal_px", focal_px)
     delta_vy = check_nonzero_finite("delta_vy", delta_vy, what="a non-zero finite translation")
-    return _special_case(f * delta_vy * np.sin(alpha), delta_vn)
+    return _special_case(f * delta_vy * np.sin(as_real("alpha", alpha)), delta_vn)
 
 
 def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float):
@@ -317,20 +317,21 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
     ------
     TypeError
         ``camera`` is not a :class:`~nfdepth.camera.PinholeCamera`, ``delta_vz`` is not
-        a number (a str or bool too), or ``rows``, ``cols`` or ``delta_vn`` is not real
-        numbers (complex, text, objects).
+        a number (a str or bool too), or ``rows``, ``cols``, ``delta_vn`` or ``alpha`` is
+        not real numbers (complex, text, objects).
     ValueError
         ``delta_vz`` is 0 or not finite.
     """
     camera = _camera("camera", camera)
     delta_vz = check_nonzero_finite("delta_vz", delta_vz, what="a non-zero finite translation")
     x, y = camera.to_normalized(rows, cols)
+    alpha = as_real("alpha", alpha)
     return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
 
 
 def _check_std(name: str, std) -> np.ndarray:
     """A standard deviation: >= 0 (NaN: unknown), else ValueError."""
-    std = _real(name, std)
+    std = as_real(name, std)
     with np.errstate(invalid="ignore"):
         negative = std < 0
     if np.any(negative):
@@ -388,12 +389,13 @@ def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
     Raises
     ------
     TypeError
-        ``delta_vn_std`` is not real numbers (complex, text, objects).
+        ``delta_vn``, ``a``, ``b`` or ``delta_vn_std`` is not real numbers (complex, text,
+        objects).
     ValueError
         ``delta_vn_std`` has a negative value, the arrays do not broadcast together, or
         ``axis`` is out of range (NumPy's ``AxisError``, a ``ValueError``).
     """
-    dvn, a, b, std = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (delta_vn, a, b, _check_std("delta_vn_std", delta_vn_std))))
+    dvn, a, b, std = np.broadcast_arrays(as_real("delta_vn", delta_vn), as_real("a", a), as_real("b", b), _check_std("delta_vn_std", delta_vn_std))
     usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (b != 0)
     exact = usable & (std == 0)
     has_exact = np.any(exact, axis=axis, keepdims=True)

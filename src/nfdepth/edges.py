@@ -31,6 +31,7 @@ import numpy as np
 
 from ._quantile import percentile
 from ._validate import (
+    as_real,
     check_fraction,
     check_int,
     check_scale_px,
@@ -140,11 +141,11 @@ def block_structure_tensor(grad_col: np.ndarray, grad_row: np.ndarray, *, window
         ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
         ``window_sigma_px`` is not positive, not finite or above 1e4.
     TypeError
-        ``window_sigma_px`` is not a number (a str or bool too).
+        ``window_sigma_px`` is not a number (a str or bool too), or ``grad_col`` or
+        ``grad_row`` is not real numbers (complex, text, objects).
     """
     sigma, radius = _corner_window_blocks(window_sigma_px)
-    gc = np.asarray(grad_col, dtype=np.float64)
-    gr = np.asarray(grad_row, dtype=np.float64)
+    gc, gr = as_real("grad_col", grad_col), as_real("grad_row", grad_row)
     if gc.shape != gr.shape or gc.ndim != 2 or gc.size == 0:
         msg = f"grad_col and grad_row must be non-empty 2-D arrays of one shape, got {gc.shape} and {gr.shape}"
         raise ValueError(msg)
@@ -231,7 +232,8 @@ def corner_ratio(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px:
         ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
         ``window_sigma_px`` is not positive, not finite or above 1e4.
     TypeError
-        ``window_sigma_px`` is not a number (a str or bool too).
+        ``window_sigma_px`` is not a number (a str or bool too), or ``grad_col`` or
+        ``grad_row`` is not real numbers (complex, text, objects).
     """
     jxx, jyy, jxy = _read_back(block_structure_tensor(grad_col, grad_row, window_sigma_px=window_sigma_px), np.shape(grad_col))
     # 0.5 (jxx + jyy) +/- sqrt(max(0.25 (jxx - jyy)^2 + jxy^2, 0)), in place in the read-back's planes
