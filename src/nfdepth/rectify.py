@@ -803,8 +803,9 @@ class CalibratedGridDepth:
 
     ``depth``, ``depth_std``, ``edge_mask`` as :class:`CalibratedRowDepth`
     (the reference camera's own pixels); ``line_count``: how many of the two
-    lines gave the pixel a value; ``conflict``: pixels both gave values too
-    far apart to fuse (NaN); ``row``, ``column``: each line's
+    lines' values the fused depth holds (0 wherever it is NaN, also at a
+    ``conflict``); ``conflict``: pixels both gave values too far apart to
+    fuse (NaN); ``row``, ``column``: each line's
     :class:`CalibratedRowDepth`.
     """
 
