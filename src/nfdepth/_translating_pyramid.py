@@ -70,7 +70,7 @@ from ._resample import remap_linear, sample_points
 from .camera import PinholeCamera, RigidMotion, _magnitude
 from .depth import Reason, solve_inverse_depth
 from .normal_flow import gaussian_smooth
-from .pipelines import _noise_level, static_stereo_edges
+from .pipelines import _noise_level, _point_pixels, static_stereo_edges
 
 _ITERATIONS = 3  # warp-and-update passes per pyramid level
 _SIGMA_PX = 1.0  # smoothing at every level before the dense update
@@ -299,8 +299,7 @@ def edge_depth_coarse_to_fine(
         min_cos=edge_options.get("min_cos", 0.25),
     )
     ok = inv.reason == Reason.OK
-    ii = np.clip(np.floor(res.rows).astype(np.int64), 0, prior.shape[0] - 1)
-    jj = np.clip(np.floor(res.cols).astype(np.int64), 0, prior.shape[1] - 1)
+    ii, jj = _point_pixels(res.rows, res.cols, prior.shape)
     outside = ~inside[ii, jj]
     inv.reason[ok & outside] = Reason.NO_DATA
     # the residual is per central step; the outer frame farthest from the middle one moved reach times as far

@@ -1113,9 +1113,10 @@ def edge_depth_maps(result) -> tuple[np.ndarray, np.ndarray]:
     h, w = result.camera.shape
     depth = np.full((h, w), np.nan, dtype=np.float32)
     std = np.full((h, w), np.nan, dtype=np.float32)
+    from .pipelines import _point_pixels
+
     ok = result.valid
-    ii = np.floor(result.rows[ok]).astype(np.int64)
-    jj = np.floor(result.cols[ok]).astype(np.int64)
+    ii, jj = _point_pixels(result.rows[ok], result.cols[ok], (h, w))
     depth[ii, jj] = result.depth[ok]
     std[ii, jj] = result.depth_std[ok]
     return depth, std

@@ -123,6 +123,7 @@ from .pipelines import (
     _check_sigma_fits,
     _depth_bearing_mask,
     _median_displacement,
+    _point_pixels,
     _void_points,
     dynamic_stereo,
     static_stereo_edges,
@@ -1057,8 +1058,7 @@ def _video_depths(
                 behind_points += behind
                 determinable_points += behind + ahead
             ok = res.valid
-            ii = np.floor(res.rows[ok]).astype(np.int64)
-            jj = np.floor(res.cols[ok]).astype(np.int64)
+            ii, jj = _point_pixels(res.rows[ok], res.cols[ok], shape)
             rho = res.inverse_depth.rho[ok]
             std = res.inverse_depth.rho_std[ok]
             # the frames are float32: depths and inverse depths beyond it would come out inf or 0
