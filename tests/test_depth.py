@@ -277,3 +277,57 @@ def test_fuse_inverse_depth_takes_exact_measurements_and_refuses_a_negative_std(
     cam = PinholeCamera(focal_px=100.0, width_px=64, height_px=48)
     with pytest.raises(ValueError, match=r"^delta_vn_std must be >= 0"):
         solve_inverse_depth([-0.5], camera=cam, rows=[23.5], cols=[31.5], alpha=[0.0], relative_motion=RigidMotion((-2, 0, 0)), delta_vn_std=[-0.05])
+
+
+def test_fuse_inverse_depth_neither_overflows_nor_underflows():
+    """The sums w B^2 and w B (dVn - A) were taken as they stand: B = 1e-200 underflowed them to 0 (NaN, with a count
+    of 1), std = 1e-200 overflowed them (NaN with std 0). Relative to the most informative measurement they do neither;
+    the results are the analytic ones at any scale."""
+    for scale in (1e-200, 1e-100, 1.0, 1e100, 1e200):
+        # rho = dVn / B per measurement: 1 and 3 with equal information: mean 2, std (std / |B|) / sqrt(2)
+        rho, rho_std, count = fuse_inverse_depth([scale, 3 * scale], 0.0, scale, [scale, scale])
+        assert rho == pytest.approx(2.0, rel=1e-12)
+        assert rho_std == pytest.approx(np.sqrt(0.5), rel=1e-12)
+        assert count == 2
+        rho, rho_std, count = fuse_inverse_depth([1.0, 3.0], 0.0, 1.0, [scale, scale])
+        assert rho == pytest.approx(2.0, rel=1e-12)
+        assert rho_std == pytest.approx(scale * np.sqrt(0.5), rel=1e-12)
+        assert count == 2
+    # information so large that |B| / std overflows counts as exact (std 0), as a std of 0 does
+    rho, rho_std, count = fuse_inverse_depth([1.0, 5.0], 0.0, 1.0, [1e-320, 1.0])
+    assert (float(rho), float(rho_std), int(count)) == (1.0, 0.0, 1)
+    # one measurement 1e200 times less informative than the other: its weight is 0 to float precision
+    rho, rho_std, count = fuse_inverse_depth([1.0, 5.0], 0.0, 1.0, [1e-100, 1e100])
+    assert (float(rho), float(rho_std), int(count)) == (1.0, 1e-100, 2)
+
+
+def test_special_cases_refuse_an_undeterminable_normal_as_eq4_does():
+    """Eq. 6 for a normal perpendicular to the translational flow is 0 / 0; in floats cos(pi/2) = 6e-17 gave
+    Z = 2.4e-14 for any measured flow, a depth that looked like one. Below min_cos (at least 1e-12) it is NaN, as
+    solve_inverse_depth has it; with min_cos the three solvers refuse what eq. 4's solver refuses."""
+    f, t = 100.0, -2.0
+    # x translation, normal along y: cos(alpha) = 6e-17
+    assert np.isnan(depth_x_translation(-0.5, np.pi / 2, focal_px=f, delta_vx=t))
+    assert np.isnan(depth_y_translation(-0.5, 0.0, focal_px=f, delta_vy=t))
+    # z translation: the principal point, and a normal perpendicular to the radial direction
+    cx, cy = CAM.cx_px, CAM.cy_px
+    rows, cols = np.array([cy, cy, cy]), np.array([cx, cx + 30.0, cx + 30.0])
+    z = depth_z_translation([0.3, 0.3, 0.3], [0.0, np.pi / 2, 0.0], camera=CAM, rows=rows, cols=cols, delta_vz=-1.5)
+    assert np.isnan(z[:2]).all() and z[2] > 0
+    # min_cos: the points eq. 4's solver refuses at the same bound, and only those
+    rng = np.random.default_rng(8)
+    rows, cols, depth, alpha = random_points(rng, 400)
+    for translation, fn, kw in (
+        ((-2.0, 0, 0), depth_x_translation, {"focal_px": CAM.focal_px, "delta_vx": -2.0}),
+        ((0, -2.0, 0), depth_y_translation, {"focal_px": CAM.focal_px, "delta_vy": -2.0}),
+        ((0, 0, 1.5), depth_z_translation, {"camera": CAM, "rows": rows, "cols": cols, "delta_vz": 1.5}),
+    ):
+        rel = RigidMotion(translation=translation)
+        dvn = normal_flow_px(CAM, rows, cols, depth, alpha, rel)
+        general = solve_inverse_depth(dvn, camera=CAM, rows=rows, cols=cols, alpha=alpha, relative_motion=rel, min_cos=0.5)
+        special = fn(dvn, alpha, min_cos=0.5, **kw)
+        np.testing.assert_array_equal(np.isfinite(special), general.reason == Reason.OK)
+        assert 0.2 < np.isnan(special).mean() < 0.6  # min_cos 0.5 refuses the normals within 30 degrees of perpendicular
+        np.testing.assert_allclose(special[np.isfinite(special)], depth[np.isfinite(special)], rtol=1e-8)
+    with pytest.raises(ValueError, match=r"^min_cos must be within \[0, 1\], got 1.5$"):
+        depth_y_translation(-0.5, 0.0, focal_px=f, delta_vy=t, min_cos=1.5)

@@ -184,14 +184,17 @@ def solve_inverse_depth(
     return InverseDepth(rho, rho_std, reason, np.asarray(b, dtype=float))
 
 
-def _special_case(numerator, delta_vn):
+def _special_case(factor, cos, delta_vn, min_cos):
+    """``Z = factor * cos / dVn`` where ``|cos| >= min_cos`` (at least 1e-12, as in eq. 4's solver) and ``Z > 0``; NaN elsewhere."""
+    min_cos = check_fraction("min_cos", min_cos)
     dvn = as_real("delta_vn", delta_vn)
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.asarray(numerator, dtype=float) / dvn
-    return np.where((z > 0) & np.isfinite(z), z, np.nan)  # dVn = 0 (at infinity) is no depth either
+        z = factor * cos / dvn
+        determinable = np.abs(cos) >= max(min_cos, 1e-12)
+    return np.where((z > 0) & np.isfinite(z) & determinable, z, np.nan)  # dVn = 0 (at infinity) is no depth either
 
 
-def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
+def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float, min_cos: float = 0.0):
     """Depth when the relative motion is a pure x translation (paper eq. 5, 6).
 
     ``Z = f dVx cos(alpha) / dVn`` (``dVx`` in scene units per unit time,
@@ -210,6 +213,10 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
         ``dVx``, the x component of the relative motion ``V_m - V_s`` of the scene, in
         scene units per unit time (non-zero): camera m translating toward +X relative
         to camera s gives ``dVx < 0`` (``V = -T``).
+    min_cos : float
+        Smallest ``|cos(alpha)|`` accepted, in [0, 1]. The default 0 is eq. 6 as printed,
+        but for a normal perpendicular to x within 1e-12 (depth undeterminable, where
+        ``cos(pi/2)`` is 6e-17, not 0), which gets NaN, as in :func:`solve_inverse_depth`.
 
     Returns
     -------
@@ -217,9 +224,9 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
         Depth ``Z`` in the scene units of ``delta_vx``, of the broadcast shape of
         ``delta_vn`` and ``alpha`` (0-d for scalar input). NaN where ``Z`` is not a
         positive finite number: ``dVn = 0`` (at infinity), ``dVn`` of the sign that puts
-        the point behind the camera, NaN input. There is no ``min_cos`` test: where the
-        normal is nearly perpendicular to x (``cos(alpha)`` near 0) ``Z`` is a number,
-        however unreliable (:func:`solve_inverse_depth` refuses such points).
+        the point behind the camera, NaN input, ``|cos(alpha)|`` below ``min_cos``. Above
+        it, a normal nearly perpendicular to x gives a number, however unreliable
+        (:func:`solve_inverse_depth` refuses ``|cos| < 0.25`` by default).
 
     Raises
     ------
@@ -227,7 +234,7 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
         ``focal_px`` or ``delta_vx`` is not a number (a str or bool too), or
         ``delta_vn`` or ``alpha`` is not real numbers (complex, text, objects).
     ValueError
-        ``focal_px`` is not positive and finite, ``delta_vx`` is 0 or not finite.
+        ``focal_px`` is not positive and finite, ``delta_vx`` is 0 or not finite, ``min_cos`` is not within [0, 1].
 
     Examples
     --------
@@ -238,10 +245,10 @@ def depth_x_translation(delta_vn, alpha, *, focal_px: float, delta_vx: float):
     """
     f = check_positive_finite("focal_px", focal_px)
     delta_vx = check_nonzero_finite("delta_vx", delta_vx, what="a non-zero finite translation")
-    return _special_case(f * delta_vx * np.cos(as_real("alpha", alpha)), delta_vn)
+    return _special_case(f * delta_vx, np.cos(as_real("alpha", alpha)), delta_vn, min_cos)
 
 
-def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
+def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float, min_cos: float = 0.0):
     """Depth for a pure y translation: ``Z = f dVy sin(alpha) / dVn``.
 
     Eq. 4 with only ``dVy`` non-zero, the y analogue of eq. 6
@@ -259,6 +266,10 @@ def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
         ``dVy``, the y component of the relative motion ``V_m - V_s`` of the scene, in
         scene units per unit time (non-zero): camera m translating toward +Y (down)
         relative to camera s gives ``dVy < 0``.
+    min_cos : float
+        Smallest ``|sin(alpha)|`` (the cosine of the angle between the normal and y)
+        accepted, in [0, 1]; the default 0 refuses only ``|sin(alpha)| < 1e-12``
+        (:func:`depth_x_translation`).
 
     Returns
     -------
@@ -266,7 +277,7 @@ def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
         Depth ``Z`` in the scene units of ``delta_vy``, of the broadcast shape of
         ``delta_vn`` and ``alpha`` (0-d for scalar input); NaN where ``Z`` is not a
         positive finite number (``dVn = 0``, a point behind the camera, NaN input). No
-        ``min_cos`` test: near ``sin(alpha) = 0`` ``Z`` is a number, however unreliable.
+        ``|sin(alpha)|`` below ``min_cos``.
 
     Raises
     ------
@@ -274,14 +285,14 @@ def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float):
         ``focal_px`` or ``delta_vy`` is not a number (a str or bool too), or
         ``delta_vn`` or ``alpha`` is not real numbers (complex, text, objects).
     ValueError
-        ``focal_px`` is not positive and finite, ``delta_vy`` is 0 or not finite.
+        ``focal_px`` is not positive and finite, ``delta_vy`` is 0 or not finite, ``min_cos`` is not within [0, 1].
     """
     f = check_positive_finite("focal_px", focal_px)
     delta_vy = check_nonzero_finite("delta_vy", delta_vy, what="a non-zero finite translation")
-    return _special_case(f * delta_vy * np.sin(as_real("alpha", alpha)), delta_vn)
+    return _special_case(f * delta_vy, np.sin(as_real("alpha", alpha)), delta_vn, min_cos)
 
 
-def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float):
+def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, delta_vz: float, min_cos: float = 0.0):
     """Depth for a pure z translation: ``Z = -f dVz (x cos a + y sin a) / dVn``.
 
     Eq. 4 with only ``dVz`` non-zero; ``x``, ``y`` are the normalised coordinates of
@@ -303,6 +314,10 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
         ``dVz``, the z component of the relative motion ``V_m - V_s`` of the scene, in
         scene units per unit time (non-zero): camera m moving forward relative to
         camera s gives ``dVz < 0`` (flow away from the principal point).
+    min_cos : float
+        Smallest ``|cos|`` of the angle between the normal and the radial direction
+        ``(x, y)`` accepted, in [0, 1]; the default 0 refuses only ``|cos| < 1e-12`` and
+        the principal point itself (:func:`depth_x_translation`).
 
     Returns
     -------
@@ -310,8 +325,9 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
         Depth ``Z`` in the scene units of ``delta_vz``, of the broadcast shape of
         ``delta_vn``, ``alpha``, ``rows`` and ``cols`` (0-d for scalar input); NaN where
         ``Z`` is not a positive finite number (``dVn = 0``, a point behind the camera,
-        NaN input). No ``min_cos`` test: near the principal point, or with the normal
-        nearly perpendicular to the radial direction, ``Z`` is a number, however unreliable.
+        NaN input, ``|cos|`` below ``min_cos``, the principal point). Above ``min_cos``, near
+        the principal point or with the normal nearly perpendicular to the radial direction,
+        ``Z`` is a number, however unreliable.
 
     Raises
     ------
@@ -320,13 +336,16 @@ def depth_z_translation(delta_vn, alpha, *, camera: PinholeCamera, rows, cols, d
         a number (a str or bool too), or ``rows``, ``cols``, ``delta_vn`` or ``alpha`` is
         not real numbers (complex, text, objects).
     ValueError
-        ``delta_vz`` is 0 or not finite.
+        ``delta_vz`` is 0 or not finite, ``min_cos`` is not within [0, 1].
     """
     camera = _camera("camera", camera)
     delta_vz = check_nonzero_finite("delta_vz", delta_vz, what="a non-zero finite translation")
     x, y = camera.to_normalized(rows, cols)
     alpha = as_real("alpha", alpha)
-    return _special_case(-camera.focal_px * delta_vz * (x * np.cos(alpha) + y * np.sin(alpha)), delta_vn)
+    radius = np.hypot(x, y)  # the translational flow is radial: cos is that of the normal to (x, y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = (x * np.cos(alpha) + y * np.sin(alpha)) / radius
+    return _special_case(-camera.focal_px * delta_vz * radius, cos, delta_vn, min_cos)
 
 
 def _check_std(name: str, std) -> np.ndarray:
@@ -352,9 +371,11 @@ def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
         \\qquad w_k = \\sigma_k^{-2}.
 
     Measurements with ``B = 0`` or a non-finite ``dVn``, ``A``, ``B`` or std (NaN:
-    unknown) are ignored. Measurements of std 0 (exact) outweigh
-    every other: where a point has any, they alone give its estimate (equal
-    weights) and its std is 0. A negative std is refused (ValueError).
+    unknown) are ignored. Measurements of std 0 (exact; or so small against
+    ``B`` that ``|B| / std`` overflows) outweigh every other: where a point has
+    any, they alone give its estimate (equal weights) and its std is 0. The
+    sums are taken relative to a point's most informative measurement, so
+    neither a tiny std nor a tiny ``B`` overflows or underflows them. A negative std is refused (ValueError).
     The three results have the broadcast shape of the inputs without ``axis``
     (for 1-D input: 0-d arrays and a NumPy integer).
 
@@ -397,18 +418,25 @@ def fuse_inverse_depth(delta_vn, a, b, delta_vn_std, *, axis: int = 0):
     """
     dvn, a, b, std = np.broadcast_arrays(as_real("delta_vn", delta_vn), as_real("a", a), as_real("b", b), _check_std("delta_vn_std", delta_vn_std))
     usable = np.isfinite(dvn) & np.isfinite(a) & np.isfinite(b) & np.isfinite(std) & (b != 0)
-    exact = usable & (std == 0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # each measurement's own inverse depth, and its information |B| / std (inf: exact)
+        own = np.where(usable, (dvn - a) / b, 0.0)
+        info = np.where(usable, np.abs(b) / std, 0.0)
+    exact = usable & np.isinf(info)  # std 0, or so small against B that B / std overflows
     has_exact = np.any(exact, axis=axis, keepdims=True)
     usable = np.where(has_exact, exact, usable)  # the exact measurements alone where a point has any
+    info = np.where(has_exact, exact.astype(float), info)  # equal weights among them
+    # Weights relative to the point's most informative measurement, in (0, 1]: sum(w B^2) and
+    # sum(w B (dVn - A)) neither overflow (std 1e-200) nor underflow to 0 (B 1e-200).
+    scale = np.max(info, axis=axis, keepdims=True)
     with np.errstate(divide="ignore", invalid="ignore"):
-        w = np.where(usable, np.where(has_exact, 1.0, 1.0 / std**2), 0.0)
-        num = np.sum(np.where(usable, w * b * (dvn - a), 0.0), axis=axis)
-        den = np.sum(np.where(usable, w * b * b, 0.0), axis=axis)
-        rho = num / den
-        rho_std = 1.0 / np.sqrt(den)
+        w = np.square(info / scale)
+        den = np.sum(w, axis=axis)
+        rho = np.sum(np.where(w > 0, w * own, 0.0), axis=axis) / den  # (a weight that underflowed to 0 times an inf)
+        rho_std = 1.0 / (np.squeeze(scale, axis=axis) * np.sqrt(den))
     rho_std = np.where(np.squeeze(has_exact, axis=axis), 0.0, rho_std)
     count = np.sum(usable, axis=axis)
-    bad = den <= 0
-    rho = np.where(bad, np.nan, rho)
-    rho_std = np.where(bad, np.nan, rho_std)
+    none = count == 0
+    rho = np.where(none, np.nan, rho)
+    rho_std = np.where(none, np.nan, rho_std)
     return rho, rho_std, count
