@@ -12,6 +12,8 @@ and the memory use of a 4-megapixel triple.
 from __future__ import annotations
 
 import os
+import pickle
+import re
 import signal
 import subprocess
 import sys
@@ -379,17 +381,30 @@ def test_edge_pipelines_say_which_rule_left_no_edge_points():
     """The warning names the rule that left no edge point, not "textureless" when an option rejected them all."""
     scene = synthetic.paper_dynamic_sequence(1, image_size_px=120)
     run = {"camera": scene.camera, "relative_motion": scene.relative_motion, "noise_std": 0.0}
-    with pytest.warns(UserWarning, match=r"^no edge points: all \d+ strong zero crossings in the reference image of shape \(120, 120\) are corners \(raise max_corner_ratio to keep some\); the result is empty$"):
+    with pytest.warns(nf.NoEdgePointsWarning, match=r"^no edge points: all \d+ strong zero crossings in the reference image of shape \(120, 120\) are corners \(raise max_corner_ratio to keep some\); the result is empty$") as said:
         assert len(nf.dynamic_stereo(scene.frames, max_corner_ratio=0.0, **run)) == 0
-    with pytest.warns(UserWarning, match=r"^no edge points: the images are textureless \(no zero crossing in the reference image of shape \(120, 120\) reaches the gradient threshold 1e\+30"):
+    # the rule and the message's parts, for a program (nfdepth's video run rewrites the hint from them)
+    (w,) = said.list
+    assert (w.message.rule, w.message.hint, w.message.consequence) == ("corner", "(raise max_corner_ratio to keep some)", "the result is empty")
+    assert re.fullmatch(r"all \d+ strong zero crossings in the reference image of shape \(120, 120\) are corners", w.message.reason)
+    assert issubclass(nf.NoEdgePointsWarning, UserWarning)
+    with pytest.warns(nf.NoEdgePointsWarning, match=r"^no edge points: the images are textureless \(no zero crossing in the reference image of shape \(120, 120\) reaches the gradient threshold 1e\+30") as said:
         assert len(nf.dynamic_stereo(scene.frames, min_gradient=1e30, **run)) == 0
-    from nfdepth.edges import _no_edge_points_message
+    assert [w.message.rule for w in said.list] == ["gradient"]
+    with pytest.warns(nf.NoEdgePointsWarning) as said:
+        nf.static_stereo([np.full((60, 80), 0.5)] * 3, reference=1)
+    assert [(w.message.rule, w.message.consequence) for w in said.list] == [("zero crossing", "the dense map is measured without them")]
+    # a copy (pickle: a warning sent from a worker process) keeps the attributes
+    copied = pickle.loads(pickle.dumps(said.list[0].message))
+    assert (type(copied), str(copied), copied.rule, copied.reason) == (nf.NoEdgePointsWarning, str(said.list[0].message), "zero crossing", said.list[0].message.reason)
+    from nfdepth.edges import _no_edge_points_warning
 
     field = nf.normal_flow(scene.frames[1:4], sigma_px=2.0)
     middle = nf.gaussian_smooth(scene.frames[2], sigma_px=2.0)
     inside_only = nf.select_edge_points(field, middle, border_px=60)  # 119 x 119 cells: no cell is 60 from every side
     assert not inside_only.mask.any()
-    assert _no_edge_points_message(inside_only).endswith("strong zero crossings all lie within border_px of the border")
+    border = _no_edge_points_warning(inside_only)
+    assert str(border).endswith("strong zero crossings all lie within border_px of the border") and border.rule == "border"
 
 
 def test_edge_pipelines_take_extreme_but_valid_scales():

@@ -12,7 +12,7 @@ import pytest
 from cli_runner import run_cli
 
 import nfdepth.cli
-from nfdepth import synthetic
+from nfdepth import NoEdgePointsWarning, synthetic
 from nfdepth.cli import main
 from nfdepth.rig import RigError, load_rig
 from nfdepth.video import depth_from_video, read_video
@@ -326,6 +326,10 @@ def test_videos_library_matches_truth(pair):
         next(dynamic_stereo_from_videos(moving, reference, rig=rig))
     with pytest.raises(ValueError, match="frame 1 has no two frames before it"):
         next(dynamic_stereo_from_videos(moving, reference, rig=rig, crossings=[1]))
+    # a crossing's warnings are named by it and keep their class and attributes
+    with pytest.warns(NoEdgePointsWarning, match=r"^crossing 4: no edge points: all \d+ strong zero crossings .* are corners") as said:
+        list(dynamic_stereo_from_videos(moving, reference, rig=rig, crossings=[4], max_corner_ratio=0.0))
+    assert [(w.message.rule, w.message.consequence) for w in said.list] == [("corner", "the result is empty")]
 
 
 def test_videos_wrong_crossing_warns(pair):
@@ -1146,6 +1150,8 @@ def test_a_dense_map_behind_the_camera_is_reported_without_edge_points():
     # naming max_corner_ratio, which depth_from_video does not take)
     none = [s for s in said if s.startswith("no edge points")]
     assert len(none) == 1 and none[0].startswith("no edge points: in 3 of 3 frames (1-3), e.g. frame 1: all ") and "max_corner_ratio" not in none[0], none
+    (run,) = [c.message for c in caught if isinstance(c.message, NoEdgePointsWarning)]  # its category, with the first frame's rule
+    assert (run.rule, run.hint, run.consequence) == ("corner", "(a texture of blobs rather than edges: the dense maps measure it)", "")
 
 
 # ------------------------------------------------------------------ checked at the call, not at the first frame

@@ -401,3 +401,16 @@ def test_a_warning_both_axes_give_is_said_once():
         static_stereo_xy(row.frames, col.frames, row_reference=1, column_reference=1, disparity_range_px=(5.0, 9.0))
     messages = [str(w.message) for w in caught]
     assert len(messages) == 1 and "no unique match between disparities 5 and 9 px" in messages[0], messages
+
+
+def test_an_axis_warning_keeps_its_class_and_attributes():
+    """The axes' warnings were said again from their text and category: a NoEdgePointsWarning (whose message is
+    built from its parts) came out as "no edge points: no edge points: ..." without its rule. It is said as it
+    came, once."""
+    flat = [np.full((48, 64), 0.5, np.float32)] * 3
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        static_stereo_xy(flat, flat, row_reference=1, column_reference=1)
+    (said,) = [w.message for w in caught if isinstance(w.message, nfdepth.NoEdgePointsWarning)]
+    assert str(said).startswith("no edge points: the images are textureless (") and str(said).count("no edge points") == 1
+    assert said.rule == "zero crossing"

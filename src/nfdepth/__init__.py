@@ -11,7 +11,7 @@ Camera and motion model (paper eq. 1, 3, 4)
 Normal flow (section 3.1)
     normal_flow, gradients, gaussian_smooth, GradientField, estimate_noise_std
 Edge points (section 3.2)
-    select_edge_points, EdgeSelection
+    select_edge_points, EdgeSelection, NoEdgePointsWarning
 Depth solvers (eq. 4-6) and fusion
     solve_inverse_depth, depth_x_translation, depth_y_translation,
     depth_z_translation, fuse_inverse_depth, InverseDepth, Reason
@@ -85,7 +85,7 @@ from .depth import (
     fuse_inverse_depth,
     solve_inverse_depth,
 )
-from .edges import EdgeSelection, select_edge_points
+from .edges import EdgeSelection, NoEdgePointsWarning, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, normal_flow
 from .io import depth_to_points, read_image, read_pfm, write_array, write_colormap_png, write_pfm, write_ply
 from .pipelines import EdgeDepth, dynamic_stereo, static_stereo_edges
@@ -173,6 +173,7 @@ __all__ = [
     "estimate_noise_std",
     "select_edge_points",
     "EdgeSelection",
+    "NoEdgePointsWarning",
     "solve_inverse_depth",
     "depth_x_translation",
     "depth_y_translation",

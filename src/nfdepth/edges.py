@@ -61,6 +61,7 @@ def rounding_gradient_floor(smoothed_middle: np.ndarray) -> float:
 
 __all__ = [
     "EdgeSelection",
+    "NoEdgePointsWarning",
     "laplacian_zero_crossings",
     "block_structure_tensor",
     "corner_ratio",
@@ -281,26 +282,66 @@ class EdgeSelection:
     corner_ratio: np.ndarray
 
 
-def _no_edge_points_message(selection: EdgeSelection, where: str = "", *, border: str = "within border_px of the border") -> str:
-    """Why ``selection`` holds no edge point, for a warning: the first rule that left none.
+class NoEdgePointsWarning(UserWarning):
+    """No point of an image passed the edge rules (section 3.2): the result has no edge point.
 
-    Starts "no edge points: "; ``where`` (e.g. " in the reference image")
-    follows the rule's name; ``border`` says where the border rule left them
-    (in the caller's options).
+    Filter it by category (``warnings.filterwarnings("ignore",
+    category=nfdepth.NoEdgePointsWarning)``) or read why from its attributes
+    (empty for one raised from a message alone, ``warnings.warn(text,
+    NoEdgePointsWarning)``).
+
+    Attributes
+    ----------
+    rule : str
+        The first rule that left none: ``"zero crossing"`` (no zero crossing of the
+        Laplacian: a textureless image), ``"gradient"`` (none reaches the gradient
+        threshold), ``"corner"`` (all strong ones are corners) or ``"border"`` (the rest
+        lie too near the border).
+    reason : str
+        Why, in words (the message after "no edge points: ", without ``hint``).
+    hint : str
+        The option that would keep some, in parentheses, or "".
+    consequence : str
+        What the caller does without them (the message's last part after "; "), or "".
+    """
+
+    def __init__(self, message: str = "", *, rule: str = "", reason: str = "", hint: str = "", consequence: str = ""):
+        super().__init__(message)
+        self.rule, self.reason, self.hint, self.consequence = rule, reason, hint, consequence
+
+
+def _no_edge_points(reason: str, rule: str, hint: str = "", consequence: str = "") -> NoEdgePointsWarning:
+    """The warning whose message is "no edge points: REASON[ HINT][; CONSEQUENCE]"."""
+    message = "no edge points: " + reason + (f" {hint}" if hint else "") + (f"; {consequence}" if consequence else "")
+    return NoEdgePointsWarning(message, rule=rule, reason=reason, hint=hint, consequence=consequence)
+
+
+def _no_edge_points_warning(
+    selection: EdgeSelection, where: str = "", *, border: str = "within border_px of the border", consequence: str = ""
+) -> NoEdgePointsWarning:
+    """Why ``selection`` holds no edge point: the first rule that left none.
+
+    ``where`` (e.g. " in the reference image") follows the rule's name;
+    ``border`` says where the border rule left them (in the caller's
+    options); ``consequence`` ends the message.
     """
     zero = selection.zero_crossing
     if not zero.any():
-        return f"no edge points: the images are textureless (no zero crossing of the Laplacian{where})"
+        return _no_edge_points(f"the images are textureless (no zero crossing of the Laplacian{where})", "zero crossing", consequence=consequence)
     strong = zero & selection.strong
     if not strong.any():
-        return (
-            f"no edge points: the images are textureless (no zero crossing{where} reaches the gradient threshold "
-            f"{selection.min_gradient:.4g} nor float32 rounding's; lower min_gradient if that is too high)"
+        return _no_edge_points(
+            f"the images are textureless (no zero crossing{where} reaches the gradient threshold "
+            f"{selection.min_gradient:.4g} nor float32 rounding's; lower min_gradient if that is too high)",
+            "gradient",
+            consequence=consequence,
         )
     kept = strong & ~selection.corner
     if not kept.any():
-        return f"no edge points: all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners (raise max_corner_ratio to keep some)"
-    return f"no edge points: the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie {border}"
+        return _no_edge_points(
+            f"all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners", "corner", "(raise max_corner_ratio to keep some)", consequence
+        )
+    return _no_edge_points(f"the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie {border}", "border", consequence=consequence)
 
 
 def _comparable_threshold(value: float, dtype) -> float:

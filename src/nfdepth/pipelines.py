@@ -26,7 +26,7 @@ from ._exposure import _plateaus, clipped_apart, match_nearby_exposures
 from ._validate import UNIT_SCALE_RANGE, as_frames, as_vector3, check_bool, check_frame_interval, check_noise_std, check_scale_px, check_within, float_dtype
 from .camera import PinholeCamera, RigidMotion, _magnitude
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
-from .edges import EdgeSelection, _no_edge_points_message, select_edge_points
+from .edges import EdgeSelection, _no_edge_points_warning, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
 
 __all__ = ["EdgeDepth", "dynamic_stereo", "static_stereo_edges"]
@@ -166,13 +166,12 @@ def _edge_result(
     m = selection.mask
     if not m.any():
         warnings.warn(
-            _no_edge_points_message(
+            _no_edge_points_warning(
                 selection,
                 f" in the reference image of shape {smoothed_middle.shape}",
                 border=f"within {BORDER_SIGMAS:g} sigma_px ({edge_options['border_px']} px) of the border, where the smoothing reaches past it (lower sigma_px / --sigma-px)",
-            )
-            + "; the result is empty",
-            UserWarning,
+                consequence="the result is empty",
+            ),
             stacklevel=3,
         )
     rows, cols = rows_grid[m], cols_grid[m]

@@ -348,7 +348,7 @@ from ._resample import remap_linear
 from ._scratch import STEREO as _SCRATCH
 from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_depth_range, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_shape_rows_cols, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
-from .edges import _no_edge_points_message, select_edge_points
+from .edges import _no_edge_points_warning, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, gaussian_smooth
 from .pipelines import _noise_level
 
@@ -2377,7 +2377,7 @@ def static_stereo(
     edge_mask = selection.mask
     if not edge_mask.any():
         what = "no depth can be measured" if edges_only else "the dense map is measured without them"
-        warnings.warn(f"{_no_edge_points_message(selection)}; {what}", UserWarning, stacklevel=2)
+        warnings.warn(_no_edge_points_warning(selection, consequence=what), stacklevel=2)
     h, w = d.shape
     reason = np.full((h, w), Reason.OK, np.uint8)
     info = m.grad_col**2 * m.s_tt  # each pixel's own information (inverse variance times s_c^2)

@@ -113,6 +113,7 @@ from ._validate import (
 )
 from .camera import PinholeCamera
 from .depth import Reason
+from .edges import NoEdgePointsWarning, _no_edge_points
 from .io import READ_EXTENSIONS, ImageReadError, read_image, to_float32_map, to_grey
 from .normal_flow import _check_stencil, estimate_noise_std
 from .pipelines import (
@@ -178,13 +179,18 @@ def _natural_key(path: Path):
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", path.name)]
 
 
-_NO_EDGE_POINTS = "no edge points: "
-
-
-def _no_edge_hint(dense: bool) -> tuple:
-    """``(the edge rules' hint, a video run's own words)``: the hint names an option of the pipelines that depth_from_video does not take."""
-    blobs = "the dense maps measure it" if dense else "dense=True / --dense measures it"
-    return ("(raise max_corner_ratio to keep some)", f"(a texture of blobs rather than edges: {blobs})")
+def _no_edge_points_in_frames(first: NoEdgePointsWarning, frames: list, triples: int, dense: bool) -> NoEdgePointsWarning:
+    """One warning for the frames with no edge point, in the words of the ``first`` one's; a run's own hint for corners
+    (the edge rules' hint names max_corner_ratio, an option of the pipelines that depth_from_video does not take)."""
+    hint = first.hint
+    if first.rule == "corner":
+        hint = f"(a texture of blobs rather than edges: {'the dense maps measure it' if dense else 'dense=True / --dense measures it'})"
+    return _no_edge_points(
+        f"in {len(frames)} of {triples} frames ({_frame_list(frames)}), e.g. frame {frames[0]}: {first.reason}",
+        first.rule,
+        hint,
+        "" if dense else "those frames have no depth of their own",
+    )
 
 
 #: A video file that decodes fewer than this share of the frames its container declares is reported (a truncated file).
@@ -927,7 +933,7 @@ def _video_depths(
     behind_frames: list[int] = []
     dense_behind_frames: list[int] = []  # frames whose dense map lies mostly behind the camera
     no_edge_frames: list[int] = []  # frames with no edge point (one warning per run)
-    no_edge_reason = ""  # why, in the first of them
+    no_edge_warning = None  # why, in the first of them
     fast_frames: list[int] = []  # frames whose edge points moved beyond the stencil's range
     blind_frames: list[int] = []  # frames of which the turned outer frames see less than half
     seen = 1.0  # the least of it
@@ -1020,9 +1026,8 @@ def _video_depths(
                         **edge_options,
                     )
             for heard_one in heard:
-                text = str(heard_one.message)
-                if text.startswith(_NO_EDGE_POINTS):
-                    no_edge_reason = no_edge_reason or text
+                if isinstance(heard_one.message, NoEdgePointsWarning):
+                    no_edge_warning = no_edge_warning or heard_one.message
                     no_edge_frames.append(k)
                 else:
                     warnings.warn(heard_one.message, stacklevel=2)
@@ -1218,14 +1223,7 @@ def _video_depths(
             stacklevel=2,
         )
     if no_edge_frames:
-        reason = no_edge_reason[len(_NO_EDGE_POINTS) :].removesuffix("; the result is empty")
-        reason = reason.replace(*_no_edge_hint(dense))
-        warnings.warn(
-            f"{_NO_EDGE_POINTS}in {len(no_edge_frames)} of {triples} frames ({_frame_list(no_edge_frames)}), e.g. frame {no_edge_frames[0]}: {reason}"
-            + ("" if dense else "; those frames have no depth of their own"),
-            UserWarning,
-            stacklevel=2,
-        )
+        warnings.warn(_no_edge_points_in_frames(no_edge_warning, no_edge_frames, triples, dense), stacklevel=2)
     if dense_behind_frames and not behind_frames:  # (with edge points the warning below says it)
         warnings.warn(
             f"in {len(dense_behind_frames)} of {triples} frames ({_frame_list(dense_behind_frames)}) most of the dense map lies behind"
@@ -1539,7 +1537,9 @@ def _crossing_depths(moving, reference, *, rig, wanted, shared, match_exposure, 
                         "; are the moving and the reference videos swapped, or is the rig's motion of the wrong sign (V = -T"
                         " for a camera moving by T)?"
                     )
-                warnings.warn(f"crossing {c}: {message}", w.category, stacklevel=2)
+                named = w.category(f"crossing {c}: {message}")
+                vars(named).update(vars(w.message))  # (a NoEdgePointsWarning's rule and reason)
+                warnings.warn(named, stacklevel=2)
             reach = int(np.ceil(2.0 * float(options.get("sigma_px", _DYNAMIC_SIGMA_PX))))  # the smoothing spreads a plateau's edge this far
             apart = clipped_apart(m_win[2], r_win[2], exposure, reach)
             if apart.any():  # the edge points beside one camera's clipped highlights: wrong flows, UNCERTAIN

@@ -265,9 +265,9 @@ def static_stereo_xy(
                 raise
             which = "row" if axis == "x" else "column"
             raise type(exc)(f"{which}: {exc}") from exc
-        said += [(str(w.message), w.category) for w in caught if (str(w.message), w.category) not in said]
-    for message, category in said:
-        warnings.warn(message, category, stacklevel=2)
+        said += [w.message for w in caught if (str(w.message), w.category) not in [(str(m), type(m)) for m in said]]
+    for message in said:
+        warnings.warn(message, stacklevel=2)  # (the warning itself: a NoEdgePointsWarning keeps its rule and reason)
     row, column = results["x"], results["y"]
     disparity, std, reason, count, conflict = fuse_axes(row, column, max_axis_disagreement_px=limit)
     if not said:  # an axis's own warning says what is wrong with it
