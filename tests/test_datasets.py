@@ -351,7 +351,7 @@ def test_middlebury2005_loader_decodes_its_files(tmp_path):
 
 def test_damaged_scene_files_are_named(tmp_path):
     folder = _write_art(tmp_path, dmin="abc")
-    with pytest.raises(D.DataFileError, match=rf"^'{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': '{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
         D.load_middlebury2005("Art", tmp_path)
     _write_art(tmp_path, dmin="")
     with pytest.raises(DataNotFoundError, match=r"should hold one number \(dmin in full-size px\), got ''$"):
@@ -359,7 +359,7 @@ def test_damaged_scene_files_are_named(tmp_path):
     colour = np.zeros((12, 16, 3), np.uint8)
     colour[..., 2] = 40
     _write_art(tmp_path, disp=colour)
-    with pytest.raises(D.ImageReadError, match=rf"^cannot read image '{folder / 'disp1.png'}': expected a grey disparity map, got colour$"):
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read image '{folder / 'disp1.png'}': expected a grey disparity map, got colour$"):
         D.load_middlebury2005("Art", tmp_path)
     _write_art(tmp_path, disp=np.full((12, 17), 16, np.uint8))
     with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': ground truth '{folder / 'disp1.png'}' is 17x12 px but the views are 16x12 px; are the files intact\?$"):
@@ -376,12 +376,75 @@ def test_damaged_scene_files_are_named(tmp_path):
     for side in ("left", "right"):
         cv2.imwrite(str(moto / f"motorcycle_{side}.png"), np.zeros((6, 8), np.uint8))
     (moto / "motorcycle_disp.npz").write_bytes(b"not a zip file")
-    with pytest.raises(DataNotFoundError, match=rf"^cannot read disparity '{moto / 'motorcycle_disp.npz'}': "):
+    with pytest.raises(DataNotFoundError, match=rf"^scene 'motorcycle': cannot read disparity '{moto / 'motorcycle_disp.npz'}': "):
         D.load_motorcycle(tmp_path)
     np.savez(moto / "motorcycle_disp.npz", other=np.zeros((6, 8)))
-    with pytest.raises(DataNotFoundError, match=r"^cannot read disparity '.*': 'arr_0 is not a file in the archive'$"):
+    with pytest.raises(DataNotFoundError, match=r"^scene 'motorcycle': cannot read disparity '.*': 'arr_0 is not a file in the archive'$"):
         D.load_motorcycle(tmp_path)
     np.savez(moto / "motorcycle_disp.npz", np.where(np.eye(6, 8) > 0, np.inf, 20.0))
     mc = D.load_motorcycle(tmp_path)  # +inf (unknown) is NaN
     np.testing.assert_array_equal(np.isnan(mc.disparity), np.eye(6, 8) > 0)
     assert np.nanmax(mc.disparity) == 20.0 and mc.colour_reference.shape == (6, 8, 3)
+
+
+def test_unreadable_scene_files_are_data_file_errors(tmp_path, monkeypatch):
+    """A file of a data set that is there but cannot be read is a DataFileError naming the scene, the file and the reason."""
+    folder = _write_art(tmp_path)
+    (folder / "view3.png").write_bytes(b"not a png")
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read image '{folder / 'view3.png'}': OpenCV could not decode it as PNG \(broken or truncated file\?\)$"):
+        D.load_scene("middlebury2005/Art", tmp_path)
+    folder = _write_art(tmp_path)
+    (folder / "disp1.png").write_bytes(b"")
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read image '{folder / 'disp1.png'}': the file is empty$"):
+        D.load_middlebury2005("Art", tmp_path)
+    folder = _write_art(tmp_path)
+    (folder / "view5.png").unlink()
+    (folder / "view5.png").mkdir()
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read '{folder / 'view5.png'}': it is a directory, not a file; is the data folder intact\?$"):
+        D.load_middlebury2005("Art", tmp_path)
+    (folder / "view5.png").rmdir()
+    folder = _write_art(tmp_path)
+    (folder / "dmin.txt").write_bytes(b"\xff\xfe2\x000\x000\x00")  # UTF-16
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read '{folder / 'dmin.txt'}': not UTF-8 text \('utf-8' codec can't decode byte 0xff in position 0: invalid start byte\); expected one number \(dmin in full-size px\)$"):
+        D.load_middlebury2005("Art", tmp_path)
+    (folder / "dmin.txt").unlink()
+    (folder / "dmin.txt").mkdir()
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read '{folder / 'dmin.txt'}': it is a directory, not a file; is the data folder intact\?$"):
+        D.load_middlebury2005("Art", tmp_path)
+    (folder / "dmin.txt").rmdir()
+    folder = _write_art(tmp_path)
+    real_read_text = type(folder).read_text
+
+    def denied(self, *args, **kwargs):
+        if self.name == "dmin.txt":
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_read_text(self, *args, **kwargs)
+
+    with monkeypatch.context() as m:  # (the tests may run as root, whom file modes do not stop)
+        m.setattr(type(folder), "read_text", denied)
+        with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': cannot read '{folder / 'dmin.txt'}': Permission denied; expected one number \(dmin in full-size px\)$"):
+            D.load_middlebury2005("Art", tmp_path)
+    tsukuba = tmp_path / "tsukuba"
+    tsukuba.mkdir()
+    for k in range(1, 6):
+        cv2.imwrite(str(tsukuba / f"scene1.row3.col{k}.ppm"), np.zeros((6, 8, 3), np.uint8))
+    (tsukuba / "truedisp.row3.col3.pgm").write_bytes(b"P5\n8 6\n255\n\x10")  # truncated
+    with pytest.raises(D.DataFileError, match=rf"^scene 'tsukuba': cannot read image '{tsukuba / 'truedisp.row3.col3.pgm'}': "):
+        D.load_tsukuba(tmp_path)
+    moto = tmp_path / "skimage-motorcycle"
+    moto.mkdir()
+    for side in ("left", "right"):
+        cv2.imwrite(str(moto / f"motorcycle_{side}.png"), np.zeros((6, 8), np.uint8))
+    np.savez(moto / "motorcycle_disp.npz", np.full((6, 8), 20.0))
+    whole = (moto / "motorcycle_disp.npz").read_bytes()
+    (moto / "motorcycle_disp.npz").write_bytes(whole[: len(whole) // 2])  # a truncated zip
+    with pytest.raises(D.DataFileError, match=rf"^scene 'motorcycle': cannot read disparity '{moto / 'motorcycle_disp.npz'}': "):
+        D.load_motorcycle(tmp_path)
+    with open(moto / "motorcycle_disp.npz", "wb") as fh:  # one array, not an archive
+        np.save(fh, np.full((6, 8), 20.0))
+    with pytest.raises(D.DataFileError, match=r"^scene 'motorcycle': cannot read disparity '.*': expected an \.npz archive holding arr_0, got a single \.npy array$"):
+        D.load_motorcycle(tmp_path)
+    np.savez(moto / "motorcycle_disp.npz", np.full((6, 8), 20.0))
+    (moto / "motorcycle_right.png").write_bytes(b"\x89PNG\r\n\x1a\n")  # the signature alone
+    with pytest.raises(D.DataFileError, match=rf"^scene 'motorcycle': cannot read image '{moto / 'motorcycle_right.png'}': "):
+        D.load_scene("motorcycle", tmp_path)

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -280,18 +282,31 @@ class MultiViewScene:
 # ------------------------------------------------------------------ loaders
 
 
-def _require(paths) -> None:
+def _require(name: str, paths) -> None:
+    """Every file of scene ``name`` there: :class:`DataNotFoundError` for a missing one, :class:`DataFileError` for a directory (or another non-file) in its place."""
     for p in paths:
-        if not p.is_file():
+        if p.is_file():
+            continue
+        if not p.exists():
             raise DataNotFoundError(f"data file missing: '{p}' (check the data folder or set {ENV_VAR})")
+        what = "it is a directory, not a file" if p.is_dir() else "it is not a regular file"
+        raise DataFileError(f"scene {name!r}: cannot read '{p}': {what}; is the data folder intact?")
 
 
-def _read_views(paths) -> list:
-    return [read_image(p, grey=True, dtype=np.float32) for p in paths]
+def _read_image(name: str, path: Path, **kwargs) -> np.ndarray:
+    """:func:`nfdepth.io.read_image`, an unreadable file a :class:`DataFileError` of scene ``name`` (with the reader's reason)."""
+    try:
+        return read_image(path, **kwargs)
+    except ImageReadError as exc:
+        raise DataFileError(f"scene {name!r}: {exc}") from None
 
 
-def _read_colour(path: Path) -> np.ndarray:
-    img = read_image(path, grey=False, dtype=None)
+def _read_views(name: str, paths) -> list:
+    return [_read_image(name, p, grey=True, dtype=np.float32) for p in paths]
+
+
+def _read_colour(name: str, path: Path) -> np.ndarray:
+    img = _read_image(name, path, grey=False, dtype=None)
     if img.ndim == 2:
         img = np.repeat(img[..., None], 3, axis=2)
     img = img[..., :3]
@@ -300,11 +315,11 @@ def _read_colour(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img)
 
 
-def _read_coded_disparity(path: Path, divisor: float) -> np.ndarray:
-    v = read_image(path, grey=False, dtype=None)
+def _read_coded_disparity(name: str, path: Path, divisor: float) -> np.ndarray:
+    v = _read_image(name, path, grey=False, dtype=None)
     if v.ndim == 3:
         if not all(np.array_equal(v[..., 0], v[..., c]) for c in range(1, min(v.shape[-1], 3))):
-            raise ImageReadError(f"cannot read image '{path}': expected a grey disparity map, got colour")
+            raise DataFileError(f"scene {name!r}: cannot read image '{path}': expected a grey disparity map, got colour")
         v = v[..., 0]
     d = v.astype(np.float32) / np.float32(divisor)
     d[v == 0] = np.nan
@@ -354,21 +369,22 @@ def load_tsukuba(root=None) -> MultiViewScene:
         If the data root or one of the scene's files (``scene1.row3.col1.ppm``
         .. ``col5.ppm``, ``truedisp.row3.col3.pgm``) is missing.
     DataFileError
-        (a DataNotFoundError) If the views differ in size, or the ground
-        truth is of another size or holds no known disparity.
-    nfdepth.io.ImageReadError
-        If a file cannot be decoded, or the ground truth is in colour (not
-        a DataNotFoundError).
+        (a DataNotFoundError) If a file is there but unreadable (a
+        directory, broken, not an image: the message names the scene, the
+        file and the reason), the ground truth is in colour, the views
+        differ in size, or the ground truth is of another size or holds no
+        known disparity.
     """
     folder = data_root(root) / "tsukuba"
     views_p = [folder / f"scene1.row3.col{k}.ppm" for k in range(1, 6)]
     disp_p = folder / "truedisp.row3.col3.pgm"
-    _require([*views_p, disp_p])
-    views = _read_views(views_p)
-    disp = _read_coded_disparity(disp_p, 16.0)
+    _require("tsukuba", [*views_p, disp_p])
+    views = _read_views("tsukuba", views_p)
+    disp = _read_coded_disparity("tsukuba", disp_p, 16.0)
     _check_shapes("tsukuba", views, disp, views_p, disp_p)
     # hand-labelled whole-pixel layers: every v is a multiple of 16
-    return MultiViewScene("tsukuba", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TSUKUBA_SOURCE, truth_step_px=1.0)
+    colour = _read_colour("tsukuba", views_p[2])
+    return MultiViewScene("tsukuba", views, 2, disp, None, None, None, 0.0, colour, _TSUKUBA_SOURCE, truth_step_px=1.0)
 
 
 def load_teddy(root=None) -> MultiViewScene:
@@ -398,20 +414,21 @@ def load_teddy(root=None) -> MultiViewScene:
         If the data root or one of the scene's files (``im0.png`` ..
         ``im8.png``, ``disp2.pgm``) is missing.
     DataFileError
-        (a DataNotFoundError) If the views differ in size, or the ground
-        truth is of another size or holds no known disparity.
-    nfdepth.io.ImageReadError
-        If a file cannot be decoded, or the ground truth is in colour (not
-        a DataNotFoundError).
+        (a DataNotFoundError) If a file is there but unreadable (a
+        directory, broken, not an image: the message names the scene, the
+        file and the reason), the ground truth is in colour, the views
+        differ in size, or the ground truth is of another size or holds no
+        known disparity.
     """
     folder = data_root(root) / "middlebury2003-teddy"
     views_p = [folder / f"im{k}.png" for k in range(9)]
     disp_p = folder / "disp2.pgm"
-    _require([*views_p, disp_p])
-    views = _read_views(views_p)
-    disp = _read_coded_disparity(disp_p, 16.0)
+    _require("teddy", [*views_p, disp_p])
+    views = _read_views("teddy", views_p)
+    disp = _read_coded_disparity("teddy", disp_p, 16.0)
     _check_shapes("teddy", views, disp, views_p, disp_p)
-    return MultiViewScene("teddy", views, 2, disp, None, None, None, 0.0, _read_colour(views_p[2]), _TEDDY_SOURCE, truth_step_px=1.0 / 16.0)
+    colour = _read_colour("teddy", views_p[2])
+    return MultiViewScene("teddy", views, 2, disp, None, None, None, 0.0, colour, _TEDDY_SOURCE, truth_step_px=1.0 / 16.0)
 
 
 def _scene_name_2005(scene) -> str:
@@ -439,24 +456,42 @@ def load_middlebury2005(scene: str, root=None) -> MultiViewScene:
         One of Art, Books, Dolls, Moebius, Reindeer (case-insensitive).
     root : str or os.PathLike, optional
         Data folder; see :func:`data_root`.
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``scene`` is not one of the five names.
+    DataNotFoundError
+        If the data root or one of the scene's files (``view0.png`` ..
+        ``view6.png``, ``disp1.png``, ``dmin.txt``) is missing.
+    DataFileError
+        (a DataNotFoundError) If a file is there but unreadable (a
+        directory, a broken image, a ``dmin.txt`` that is not UTF-8 text or
+        holds no number: the message names the scene, the file and the
+        reason), the ground truth is in colour, the views differ in size,
+        or the ground truth is of another size or holds no known disparity.
     """
     scene = _scene_name_2005(scene)
     folder = data_root(root) / "middlebury2005" / scene
     views_p = [folder / f"view{k}.png" for k in range(7)]
     disp_p = folder / "disp1.png"
     dmin_p = folder / "dmin.txt"
-    _require([*views_p, disp_p, dmin_p])
-    text = dmin_p.read_text().strip()
+    name = f"middlebury2005/{scene}"
+    _require(name, [*views_p, disp_p, dmin_p])
+    try:
+        text = dmin_p.read_text(encoding="utf-8").strip()
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = (exc.strerror or exc) if isinstance(exc, OSError) else f"not UTF-8 text ({exc})"
+        raise DataFileError(f"scene {name!r}: cannot read '{dmin_p}': {reason}; expected one number (dmin in full-size px)") from None
     try:
         dmin = float(text.split()[0])
     except (ValueError, IndexError):
-        raise DataFileError(f"'{dmin_p}' should hold one number (dmin in full-size px), got {text!r}") from None
-    views = _read_views(views_p)
-    disp = _read_coded_disparity(disp_p, 8.0)
-    name = f"middlebury2005/{scene}"
+        raise DataFileError(f"scene {name!r}: '{dmin_p}' should hold one number (dmin in full-size px), got {text!r}") from None
+    views = _read_views(name, views_p)
+    disp = _read_coded_disparity(name, disp_p, 8.0)
     _check_shapes(name, views, disp, views_p, disp_p)
     return MultiViewScene(
-        name, views, 1, disp, 1870.0, 40.0, "mm", dmin / 8.0, _read_colour(views_p[1]), _MB2005_SOURCE.format(scene=scene),
+        name, views, 1, disp, 1870.0, 40.0, "mm", dmin / 8.0, _read_colour(name, views_p[1]), _MB2005_SOURCE.format(scene=scene),
         truth_step_px=1.0 / 8.0,
     )
 
@@ -490,26 +525,34 @@ def load_motorcycle(root=None) -> MultiViewScene:
         If the data root or one of the scene's files (``motorcycle_left.png``,
         ``motorcycle_right.png``, ``motorcycle_disp.npz``) is missing.
     DataFileError
-        (a DataNotFoundError) If the ``.npz`` cannot be read or has no
-        ``arr_0``, the views differ in size, or the disparity is of another
-        size or holds no known value.
-    nfdepth.io.ImageReadError
-        If a view cannot be decoded (not a DataNotFoundError).
+        (a DataNotFoundError) If a file is there but unreadable (a
+        directory, a view that cannot be decoded, an ``.npz`` that cannot
+        be read or has no ``arr_0``: the message names the scene, the file
+        and the reason), the views differ in size, or the disparity is of
+        another size or holds no known value.
     """
     folder = data_root(root) / "skimage-motorcycle"
     views_p = [folder / "motorcycle_left.png", folder / "motorcycle_right.png"]
     disp_p = folder / "motorcycle_disp.npz"
-    _require([*views_p, disp_p])
-    views = _read_views(views_p)
+    _require("motorcycle", [*views_p, disp_p])
+    views = _read_views("motorcycle", views_p)
+    reason = None
     try:
-        with np.load(disp_p, allow_pickle=False) as z:
-            disp = np.asarray(z["arr_0"], dtype=np.float32).copy()
-    except (OSError, ValueError, KeyError, EOFError) as exc:
-        raise DataFileError(f"cannot read disparity '{disp_p}': {exc}") from None
+        with open(disp_p, "rb") as fh:  # np.load would leave its own handle open on a broken zip
+            z = np.load(fh, allow_pickle=False)
+            if isinstance(z, np.lib.npyio.NpzFile):
+                with z:
+                    disp = np.asarray(z["arr_0"], dtype=np.float32).copy()
+            else:
+                reason = "expected an .npz archive holding arr_0, got a single .npy array"
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        reason = str(exc)
+    if reason is not None:
+        raise DataFileError(f"scene 'motorcycle': cannot read disparity '{disp_p}': {reason}")
     disp[~np.isfinite(disp)] = np.nan
     _check_shapes("motorcycle", views, disp, views_p, disp_p)
     return MultiViewScene(
-        "motorcycle", views, 0, disp, 994.978, 193.001, "mm", 31.086, _read_colour(views_p[0]), _MOTORCYCLE_SOURCE,
+        "motorcycle", views, 0, disp, 994.978, 193.001, "mm", 31.086, _read_colour("motorcycle", views_p[0]), _MOTORCYCLE_SOURCE,
         principal_point_px=(311.193, 254.877),
     )
 
@@ -596,13 +639,12 @@ def load_scene(name: str, root=None) -> MultiViewScene:
     DataNotFoundError
         If the data root or one of the scene's files is missing.
     DataFileError
-        (a DataNotFoundError) If a file is there but unusable: views of
-        different sizes, a ground truth of another size than the views or
-        with no known disparity, a ``dmin.txt`` that holds no number, or an
-        unreadable Motorcycle ``.npz``.
-    nfdepth.io.ImageReadError
-        If an image file cannot be decoded, or a ground-truth image is in
-        colour (not a DataNotFoundError).
+        (a DataNotFoundError) If a file is there but unusable: unreadable
+        (a directory, an image that cannot be decoded, a ``dmin.txt`` that
+        is not UTF-8 text or holds no number, a broken Motorcycle ``.npz``;
+        the message names the scene, the file and the reason), a
+        ground-truth image in colour, views of different sizes, or a ground
+        truth of another size than the views or with no known disparity.
     """
     if not isinstance(name, str):
         msg = f"name must be a str such as 'tsukuba', got {type(name).__name__}"
@@ -625,12 +667,12 @@ def load_scene(name: str, root=None) -> MultiViewScene:
 # ------------------------------------------------------------------ transforms
 
 
-def _check_factor(factor) -> int:
+def _check_factor(factor, name: str = "factor") -> int:
+    """A downsampling factor: a positive integer (an integral float such as 2.0 too); TypeError for a bool or text."""
+    msg = f"{name} must be a positive integer, got {factor!r}"
     if isinstance(factor, bool) or not isinstance(factor, (int, np.integer, float, np.floating)):
-        msg = f"factor must be a positive integer, got {factor!r}"
         raise TypeError(msg)
     if not np.isfinite(factor) or float(factor) != int(factor) or int(factor) < 1:
-        msg = f"factor must be a positive integer, got {factor!r}"
         raise ValueError(msg)
     return int(factor)
 

@@ -563,12 +563,7 @@ def evaluate_scene(scene, *, views="all", methods=DEFAULT_METHODS, downsample: i
     if not isinstance(scene, datasets.MultiViewScene):
         msg = f"scene must be a MultiViewScene or a scene name, got {type(scene).__name__}"
         raise TypeError(msg)
-    expected = f"downsample must be a positive integer, got {downsample!r}"
-    if not isinstance(downsample, (int, float, np.integer, np.floating)):  # None, text (were int()'s own errors)
-        raise TypeError(expected)
-    if isinstance(downsample, bool) or not np.isfinite(downsample) or int(downsample) != downsample or downsample < 1:
-        raise ValueError(expected)
-    k = int(downsample)
+    k = datasets._check_factor(downsample, "downsample")
     full_ref = scene.reference_index
     idx = select_views(len(scene.views), full_ref, views)
     sub = datasets.view_subset(scene, idx) if idx != list(range(len(scene.views))) else scene
