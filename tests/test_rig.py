@@ -179,6 +179,27 @@ def test_poses_relative_to_rig_folder(tmp_path):
         rig.video.camera_position(3)
 
 
+def test_missing_poses_file_names_the_rig(tmp_path, capsys):
+    """A rig whose video.poses names no file: the message names the rig file, its value and the CSV looked for (exit code 3 as before)."""
+    sub = tmp_path / "rig"
+    sub.mkdir()
+    rig = sub / "rig.toml"
+    rig.write_text('[camera]\nfocal_px = 50\nwidth_px = 20\nheight_px = 10\n[video]\nposes = "poses.csv"\n')
+    message = f"rig '{rig}': video.poses = 'poses.csv': cannot read poses file '{sub / 'poses.csv'}': no such file"
+    with pytest.raises(FileNotFoundError) as info:
+        load_rig(rig)
+    assert str(info.value) == message
+    code, out, err = run_cli(capsys, "video", tmp_path / "frames", "--rig", rig, "--out", tmp_path / "depth.npz")
+    assert (code, out, err) == (3, "", f"nfdepth: error: {message}\n")
+    (sub / "poses.csv").mkdir()
+    with pytest.raises(FileNotFoundError) as info:
+        load_rig(rig)
+    assert str(info.value) == f"rig '{rig}': video.poses = 'poses.csv': cannot read poses file '{sub / 'poses.csv'}': it is a directory"
+    with pytest.raises(FileNotFoundError) as info:  # without a file: the key and its value
+        rig_from_dict({"camera": {"focal_px": 50, "width_px": 20, "height_px": 10}, "video": {"poses": "p.csv"}}, base_dir=sub)
+    assert str(info.value) == f"video.poses = 'p.csv': cannot read poses file '{sub / 'p.csv'}': no such file"
+
+
 @pytest.mark.parametrize(
     ("edit", "match"),
     [
@@ -329,6 +350,27 @@ def test_stereo_positions_count_that_matches_passes():
     assert opts["positions"] == [0.0, 1.0, 2.5] and opts["column_positions"] == [0.0, 2.0]
     with pytest.raises(RigError, match=r"^stereo\.positions has 3 entries, expected one per view \(4\)$"):
         stereo_options_from_rig(rig_from_dict(d), n_views=4)
+
+
+@pytest.mark.parametrize(
+    ("counts", "error", "message"),
+    [
+        ({"n_views": 0}, ValueError, "n_views must be an integer >= 1, got 0"),
+        ({"n_views": -3}, ValueError, "n_views must be an integer >= 1, got -3"),
+        ({"n_views": "3"}, TypeError, "n_views must be an integer >= 1, got '3' (str, not a number)"),
+        ({"n_views": 3.0}, TypeError, "n_views must be an integer >= 1, got 3.0 (float; give an int such as 3)"),
+        ({"n_views": True}, TypeError, "n_views must be an integer >= 1, got True (bool, not a number)"),
+        ({"n_views": 3, "n_column_views": 0}, ValueError, "n_column_views must be an integer >= 1, got 0"),
+    ],
+)
+def test_stereo_options_refuse_a_view_count_that_is_no_count(counts, error, message):
+    """Without positions in the rig nothing was compared, so any n_views passed; with them, '3' read as a mismatch."""
+    for stereo in ({"baseline": 2.0}, {"baseline": 2.0, "positions": [0, 1, 2.5], "column_positions": [0, 2]}):
+        d = copy.deepcopy(BASE)
+        d["stereo"] = stereo
+        with pytest.raises(error) as info:
+            stereo_options_from_rig(rig_from_dict(d), **counts)
+        assert type(info.value) is error and str(info.value) == message
 
 
 def test_load_rig_file_errors(tmp_path):

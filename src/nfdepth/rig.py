@@ -58,6 +58,7 @@ from ._validate import (
     as_image,
     as_path,
     check_disparity_offset,
+    check_int,
 )
 from .camera import (
     MAX_ROTATION_PER_FRAME_DEG,
@@ -795,7 +796,10 @@ def _parse_video(table, base: Path | None) -> VideoSpec:
     full = Path(path)
     if not full.is_absolute() and base is not None:
         full = base / full
-    return VideoSpec(poses=load_poses(full))
+    try:
+        return VideoSpec(poses=load_poses(full))
+    except (FileNotFoundError, InputReadError) as exc:  # (a RigError names the poses file and its line)
+        raise type(exc)(f"video.poses = {_show(path)}: {exc}") from None
 
 
 def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
@@ -814,7 +818,11 @@ def rig_from_dict(data: dict, *, base_dir=None, source=None) -> Rig:
     Raises
     ------
     RigError
-        With the key path, the value and what was expected.
+        With the key path, the value and what was expected; also an
+        invalid ``video.poses`` CSV (:func:`load_poses`).
+    FileNotFoundError, nfdepth.io.InputReadError
+        If the ``video.poses`` CSV is missing (or a directory) or cannot be
+        read; the message starts with ``video.poses = 'its value'``.
     """
     if not isinstance(data, dict):
         raise RigError(f"rig: expected a table of sections, got {type(data).__name__}")
@@ -868,9 +876,11 @@ def load_rig(path) -> Rig:
         If ``path`` is not a str or os.PathLike.
     FileNotFoundError
         If the file does not exist (or is a directory); also for a missing
-        ``video.poses`` CSV (:func:`load_poses`).
+        ``video.poses`` CSV (:func:`load_poses`): then the message starts
+        with the rig file's name and ``video.poses = 'its value'``.
     nfdepth.io.InputReadError
-        If the file or its poses CSV cannot be read (e.g. no read permission).
+        If the file or its poses CSV cannot be read (e.g. no read permission);
+        for the CSV, named as for a missing one.
     RigError
         For invalid TOML or an invalid rig; the message starts with the file name.
         Also a file that is not UTF-8, and an invalid poses CSV.
@@ -878,8 +888,8 @@ def load_rig(path) -> Rig:
     path, data = _read_toml(path, "rig")
     try:
         return rig_from_dict(data, base_dir=path.parent, source=path)
-    except RigError as exc:
-        raise RigError(f"rig '{path}': {exc}") from None
+    except (RigError, FileNotFoundError, InputReadError) as exc:  # the last two: its video.poses CSV
+        raise type(exc)(f"rig '{path}': {exc}") from None
 
 
 # ----------------------------------------------------------------- writing
@@ -985,7 +995,7 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
         A rig with a ``[stereo]`` section.
     n_views, n_column_views : int, optional
         ``n_views`` / ``n_column_views``, when given, are the numbers of views of
-        the row / column the options are for: ``stereo.positions`` /
+        the row / column the options are for (integers >= 1): ``stereo.positions`` /
         ``stereo.column_positions`` must then hold one entry per view.
 
     Returns
@@ -1006,7 +1016,13 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
         the key, its value and what was expected: a ``stereo.direction`` other
         than ``[1, 0, 0]`` or ``[0, 1, 0]``, or positions whose count is not
         ``n_views`` / ``n_column_views``. Also for a rig without ``[stereo]``.
+    TypeError, ValueError
+        If ``n_views`` or ``n_column_views`` is given and is not an integer
+        >= 1 (a bool, a str or a float is refused as well); how many views
+        stereo needs is :func:`nfdepth.stereo.static_stereo`'s to check.
     """
+    n_views = None if n_views is None else check_int("n_views", n_views, 1)
+    n_column_views = None if n_column_views is None else check_int("n_column_views", n_column_views, 1)
     s = rig._need("stereo")
     where = f"rig '{rig.source}': " if rig.source is not None else ""
     axis = s.axis
