@@ -297,6 +297,23 @@ def test_cameras_file_values_are_checked(tmp_path):
         load_cameras(tmp_path / "none.toml")
 
 
+def test_cameras_file_refuses_an_empty_distortion_list(tmp_path):
+    """distortion = [] was read as no distortion; a rig file's [camera] refuses it: 4, 5 or 8 numbers, or the key left out."""
+    from nfdepth.rectify import cameras_from_dict, load_cameras
+    from nfdepth.rig import RigError
+
+    good = {"width_px": 180, "height_px": 120, "focal_px": 400.0, "position": [0.0, 0.0, 0.0]}
+    with pytest.raises(RigError) as info:
+        cameras_from_dict({"camera": [good, {**good, "distortion": []}]})
+    assert str(info.value) == "camera[1].distortion = []: expected 4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]"
+    path = tmp_path / "c.toml"
+    path.write_text("[[camera]]\nwidth_px = 180\nheight_px = 120\nfocal_px = 400.0\nposition = [0.0, 0.0, 0.0]\ndistortion = []\n")
+    with pytest.raises(RigError, match=rf"^cameras '{re.escape(str(path))}': camera\[0\]\.distortion = \[\]: expected 4, 5 or 8 finite numbers"):
+        load_cameras(path)
+    (cam,) = cameras_from_dict({"camera": [good]})  # left out: none
+    assert cam.distortion.size == 0
+
+
 def test_the_example_cameras_file_is_the_tests_row():
     from pathlib import Path
 
@@ -385,6 +402,17 @@ def test_cameras_to_toml_round_trips():
     skewed = CalibratedCamera(matrix=[[400.0, 1.0, 90.0], [0.0, 400.0, 60.0], [0.0, 0.0, 1.0]], width_px=180, height_px=120, position=np.zeros(3), rotation=np.eye(3))
     with pytest.raises(ValueError, match=r"cameras\[0\] has a skewed pixel grid \(matrix\[0, 1\] = 1\)"):
         cameras_to_toml([skewed])
+
+
+def test_cameras_to_toml_refuses_no_cameras():
+    """No camera gave "" (a file load_cameras refuses: it needs one [[camera]] table or more)."""
+    from nfdepth.rectify import cameras_to_toml
+
+    for empty in ([], (), iter([])):
+        with pytest.raises(ValueError) as info:
+            cameras_to_toml(empty)
+        assert str(info.value) == "cameras must hold at least one CalibratedCamera, got none (load_cameras refuses a file without a [[camera]] table)"
+    assert cameras_to_toml(default_row()[:1]).startswith("[[camera]]\n")
 
 
 def test_the_example_cameras_scale_with_the_image():

@@ -70,7 +70,8 @@ __all__ = [
 MAX_OFF_LINE = 0.01
 #: A row closer than this to the cameras' mean optical axis cannot be rectified into a row of views.
 MIN_SIDEWAYS_DEG = 30.0
-_DISTORTION_SIZES = (0, 4, 5, 8)
+_FILE_DISTORTION_SIZES = (4, 5, 8)  # a cameras file's distortion: left out for none
+_DISTORTION_SIZES = (0, *_FILE_DISTORTION_SIZES)
 
 
 def _as_matrix(name: str, value, shape) -> np.ndarray:
@@ -636,8 +637,8 @@ def _parse_camera(table, key: str) -> CalibratedCamera:
         fy = _number(t, key, "fy_px", positive=True)
     cx = _number(t, key, "cx_px", required=False, default=(width - 1) / 2.0)
     cy = _number(t, key, "cy_px", required=False, default=(height - 1) / 2.0)
-    dist = t.get("distortion", [])
-    if not isinstance(dist, list) or len(dist) not in _DISTORTION_SIZES or not all(_is_number(v) and math.isfinite(v) for v in dist):
+    dist = t.get("distortion", [])  # left out: none; given: 4, 5 or 8 (an empty list is a slip, as in a rig file)
+    if "distortion" in t and (not isinstance(dist, list) or len(dist) not in _FILE_DISTORTION_SIZES or not all(_is_number(v) and math.isfinite(v) for v in dist)):
         raise _fail(f"{key}.distortion", dist, "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]")
     matrix = [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]
     if "rvec" in t or "tvec" in t:
@@ -660,7 +661,7 @@ def cameras_from_dict(data: dict) -> list:
 
     Each table: ``width_px``, ``height_px``; ``focal_px`` or ``fx_px`` and
     ``fy_px``; ``cx_px``, ``cy_px`` (default the image centre);
-    ``distortion`` (OpenCV's coefficients, default none); the pose as
+    ``distortion`` (4, 5 or 8 of OpenCV's coefficients; left out: none); the pose as
     ``position`` (optical centre, world, scene units) and ``rotation_deg``
     (camera-to-world rotation vector, degrees; default none), or as OpenCV's
     ``rvec`` (radians) and ``tvec`` (``X_cam = R X_world + t``).
@@ -761,15 +762,16 @@ def cameras_to_toml(cameras) -> str:
     -------
     str
         The TOML text, the tables separated by blank lines, ending in a
-        newline; empty for no cameras (a file :func:`load_cameras` refuses).
+        newline.
 
     Raises
     ------
     TypeError
         An item that is not a :class:`CalibratedCamera`.
     ValueError
-        A camera with a skewed pixel grid (``matrix[0, 1] != 0``), which the
-        file cannot hold.
+        No camera (a file :func:`load_cameras` would refuse), or a camera
+        with a skewed pixel grid (``matrix[0, 1] != 0``), which the file
+        cannot hold.
     """
 
     def numbers(values) -> str:
@@ -791,6 +793,9 @@ def cameras_to_toml(cameras) -> str:
         lines.append(f"position = {numbers(cam.position)}")
         lines.append(f"rotation_deg = {numbers(np.degrees(cv2.Rodrigues(cam.rotation)[0]))}")
         lines.append("")
+    if not lines:
+        msg = "cameras must hold at least one CalibratedCamera, got none (load_cameras refuses a file without a [[camera]] table)"
+        raise ValueError(msg)
     return "\n".join(lines)
 
 
