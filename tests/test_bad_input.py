@@ -107,7 +107,7 @@ BAD_LIBRARY_CALLS = [
     ("noise nan", _call(nf.estimate_noise_std, np.full((5, 5), np.nan)), ValueError, "image contains 25 non-finite"),
     # depth solvers
     ("solve camera", _call(nf.solve_inverse_depth, [1.0], camera=None, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT), TypeError, "camera must be a nfdepth.PinholeCamera, got NoneType"),
-    ("solve motion", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=(1, 0, 0)), TypeError, "relative_motion must be a nfdepth.RigidMotion, got tuple"),
+    ("solve motion", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=(1, 0, 0)), TypeError, "relative_motion must be a nfdepth.RigidMotion (e.g. RigidMotion.camera_translation((1, 0, 0))), got tuple"),
     ("solve min_cos", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=2), ValueError, "min_cos must be within [0, 1], got 2"),
     ("solve min_cos neg", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, min_cos=-0.1), ValueError, "min_cos must be within [0, 1], got -0.1"),
     ("solve max_rel_std no std", _call(nf.solve_inverse_depth, [1.0], camera=CAM32, rows=[1.0], cols=[1.0], alpha=[0.0], relative_motion=RIGHT, max_rel_std=0.1), ValueError, "max_rel_std needs delta_vn_std"),
@@ -120,7 +120,7 @@ BAD_LIBRARY_CALLS = [
     ("dyn 6 frames", _call(nf.dynamic_stereo, [TEX] * 6, camera=CAM32, relative_motion=RIGHT), ValueError, "frames must hold exactly 5 frames, got 6"),
     ("dyn camera size", _call(nf.dynamic_stereo, FRAMES5, camera=nf.PinholeCamera(100.0, 16, 32), relative_motion=RIGHT), ValueError, "camera image size (32, 16) (rows, cols) does not match the frames' shape (32, 32)"),
     ("dyn camera type", _call(nf.dynamic_stereo, FRAMES5, camera="cam", relative_motion=RIGHT), TypeError, "camera must be a nfdepth.PinholeCamera, got str"),
-    ("dyn motion type", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=(1.0, 0.0, 0.0)), TypeError, "relative_motion must be a nfdepth.RigidMotion, got tuple"),
+    ("dyn motion type", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=(1.0, 0.0, 0.0)), TypeError, "relative_motion must be a nfdepth.RigidMotion (e.g. RigidMotion.camera_translation((1, 0, 0))), got tuple"),
     ("dyn pure rotation", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=nf.RigidMotion(rotation=(0.0, 0.0, 0.01))), ValueError, "relative_motion has no translation"),
     ("dyn interval", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, frame_interval=-1.0), ValueError, "frame_interval must be a positive finite number, got -1.0"),
     ("dyn noise", _call(nf.dynamic_stereo, FRAMES5, camera=CAM32, relative_motion=RIGHT, noise_std=-1.0), ValueError, "noise_std must be a finite number >= 0, got -1.0"),

@@ -36,6 +36,7 @@ from .camera import (
     PinholeCamera,
     RigidMotion,
     _camera,
+    _motion,
     relative_normal_flow_coefficients,
 )
 
@@ -144,9 +145,7 @@ def solve_inverse_depth(
     InverseDepth
     """
     camera = _camera("camera", camera)
-    if not isinstance(relative_motion, RigidMotion):
-        msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
-        raise TypeError(msg)
+    relative_motion = _motion("relative_motion", relative_motion)
     min_cos = check_fraction("min_cos", min_cos)
     dvn = as_real("delta_vn", delta_vn)
     alpha = as_real("alpha", alpha)

@@ -24,7 +24,7 @@ import numpy as np
 
 from ._exposure import _plateaus, clipped_apart, match_nearby_exposures
 from ._validate import UNIT_SCALE_RANGE, as_frames, as_vector3, check_bool, check_frame_interval, check_noise_std, check_scale_px, check_within, float_dtype
-from .camera import PinholeCamera, RigidMotion, _magnitude
+from .camera import PinholeCamera, RigidMotion, _magnitude, _motion
 from .depth import InverseDepth, Reason, fuse_inverse_depth, solve_inverse_depth
 from .edges import EdgeSelection, _no_edge_points_warning, select_edge_points
 from .normal_flow import GradientField, estimate_noise_std, gaussian_smooth, gradients, noise_gains
@@ -450,9 +450,7 @@ def dynamic_stereo(
     frames = as_frames("frames", frames, 5, dtype=dt)
     _check_min_size("frames", frames[0].shape)
     _check_camera(camera, frames[0].shape)
-    if not isinstance(relative_motion, RigidMotion):
-        msg = f"relative_motion must be a nfdepth.RigidMotion, got {type(relative_motion).__name__}"
-        raise TypeError(msg)
+    relative_motion = _motion("relative_motion", relative_motion)
     if relative_motion.is_pure_rotation:
         msg = (
             f"relative_motion has no translation (translation={relative_motion.translation.tolist()}, "
