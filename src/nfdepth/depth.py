@@ -275,8 +275,8 @@ def depth_y_translation(delta_vn, alpha, *, focal_px: float, delta_vy: float, mi
     ndarray of float64
         Depth ``Z`` in the scene units of ``delta_vy``, of the broadcast shape of
         ``delta_vn`` and ``alpha`` (0-d for scalar input); NaN where ``Z`` is not a
-        positive finite number (``dVn = 0``, a point behind the camera, NaN input). No
-        ``|sin(alpha)|`` below ``min_cos``.
+        positive finite number (``dVn = 0``, a point behind the camera, NaN input,
+        ``|sin(alpha)|`` below ``min_cos``).
 
     Raises
     ------

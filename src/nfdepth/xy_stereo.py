@@ -265,7 +265,8 @@ def static_stereo_xy(
                 raise
             which = "row" if axis == "x" else "column"
             raise type(exc)(f"{which}: {exc}") from exc
-        said += [w.message for w in caught if (str(w.message), w.category) not in [(str(m), type(m)) for m in said]]
+        known = {(str(m), type(m)) for m in said}
+        said += [w.message for w in caught if (str(w.message), w.category) not in known]
     for message in said:
         warnings.warn(message, stacklevel=2)  # (the warning itself: a NoEdgePointsWarning keeps its rule and reason)
     row, column = results["x"], results["y"]
