@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import re
 from pathlib import Path
 
@@ -97,7 +98,6 @@ def test_a_rig_file_refuses_what_it_cannot_hold():
     """Per-frame orientations given in code (depth_from_video's orientations_rad) and poses not read from a file
     have no place in a rig file: writing the rest would read back as a rig that does not turn (it was dropped
     without a word) or fail on a bare assert."""
-    import dataclasses
 
     from nfdepth.rig import Poses, VideoSpec
 
@@ -624,3 +624,18 @@ def test_a_distortion_that_folds_the_image_is_refused():
     for ok in ([-0.3, 0.1, 0.0, 0.0], [0.2, 0.0, 0.001, -0.001, 0.0], [-0.1, 0.02, 0.0, 0.0, 0.0, 0.1, 0.01, 0.0]):
         d["camera"]["distortion"] = ok
         assert rig_from_dict(d).distortion == tuple(ok)
+
+
+def test_stereo_options_take_a_hand_built_direction_of_any_length():
+    """A rig file's direction [2, 0, 0] is read as x (normalised); a StereoSpec built by hand with it was refused as
+    'not [1, 0, 0] or [0, 1, 0]'. Its direction, not its length, decides the axis."""
+    from nfdepth.rig import StereoSpec
+
+    rig = rig_from_dict(copy.deepcopy(BASE))
+    for direction, axis in (([2.0, 0.0, 0.0], "x"), ([0.0, 0.5, 0.0], "y")):
+        built = dataclasses.replace(rig, stereo=StereoSpec(baseline=1.0, direction=np.array(direction)))
+        assert stereo_options_from_rig(built)["axis"] == axis
+    for direction in ([1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]):
+        built = dataclasses.replace(rig, stereo=StereoSpec(baseline=1.0, direction=np.array(direction)))
+        with pytest.raises(RigError, match=r"^stereo\.direction = .*: expected \[1, 0, 0\] or \[0, 1, 0\] for nfdepth stereo"):
+            stereo_options_from_rig(built)

@@ -1013,8 +1013,8 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
     ------
     RigError
         (starting ``rig 'FILE':`` when the rig was read from a file) naming
-        the key, its value and what was expected: a ``stereo.direction`` other
-        than ``[1, 0, 0]`` or ``[0, 1, 0]``, or positions whose count is not
+        the key, its value and what was expected: a ``stereo.direction`` not
+        along ``[1, 0, 0]`` or ``[0, 1, 0]`` (of any length), or positions whose count is not
         ``n_views`` / ``n_column_views``. Also for a rig without ``[stereo]``.
     TypeError, ValueError
         If ``n_views`` or ``n_column_views`` is given and is not an integer
@@ -1027,8 +1027,11 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
     where = f"rig '{rig.source}': " if rig.source is not None else ""
     axis = s.axis
     if axis is None:
+        direction = np.asarray(s.direction, dtype=float)
+        length = np.linalg.norm(direction)
+        unit = direction / length if np.isfinite(length) and length > 0 else direction  # (a hand-built spec: a file's is normalised)
         for name, vec in _AXES.items():
-            if np.allclose(s.direction, vec, atol=1e-9):
+            if np.allclose(unit, vec, atol=1e-9):
                 axis = name
         if axis is None:
             expected = "[1, 0, 0] or [0, 1, 0] for nfdepth stereo (order the views so the camera moves toward +x or +y)"
