@@ -528,7 +528,7 @@ def _kept_on_failure():
 def parent_folder_problem(path) -> str | None:
     """Why ``path`` cannot be made in its folder (``"'f' is not a directory"``, ``"directory 'x' does not exist"``), or None."""
     path = as_path("path", path)
-    parent = path.parent if str(path.parent) else Path(".")
+    parent = path.parent  # (Path(".") for a bare name)
     if parent.is_dir():
         return None
     return f"'{parent}' is not a directory" if parent.exists() else f"directory '{parent}' does not exist"
@@ -594,7 +594,7 @@ def atomic_write(path, writer_fn: Callable[[BinaryIO], object], *, force: bool =
         msg = f"writer_fn must be callable, got {type(writer_fn).__name__}"
         raise TypeError(msg)
     path = as_path("path", path)
-    parent = path.parent if str(path.parent) else Path(".")
+    parent = path.parent  # (Path(".") for a bare name)
     if path.is_dir():
         raise OutputWriteError(f"cannot write '{path}': it is a directory")
     if not parent.is_dir():
