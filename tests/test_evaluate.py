@@ -675,6 +675,10 @@ def test_an_incomplete_scene_is_skipped_with_a_warning_or_refused_when_named(tmp
         with pytest.warns(UserWarning, match=rf"^scene 'middlebury2005/Books' skipped: its folder '{tmp_path / 'middlebury2005' / 'Books'}' lacks view2.png$"):
             root, names = resolve_dataset(dataset, data)
         assert names == ["middlebury2005/Art"] and root == tmp_path.resolve()
+    (tmp_path / "middlebury2005" / "Books" / "view2.png").mkdir()  # there, but not a file
+    with pytest.warns(UserWarning, match=r"^scene 'middlebury2005/Books' skipped: .* lacks view2.png \(not a file\)$"):
+        assert resolve_dataset("all", tmp_path)[1] == ["middlebury2005/Art"]
+    (tmp_path / "middlebury2005" / "Books" / "view2.png").rmdir()
     for dataset in ("middlebury2005", "books", tmp_path / "middlebury2005"):
         with pytest.raises(DataNotFoundError, match=r"^scene 'middlebury2005/Books': data file missing: '.*view2.png' \(check the data folder"):
             resolve_dataset(dataset, tmp_path if isinstance(dataset, str) else None)
@@ -687,6 +691,22 @@ def test_cli_evaluate_refuses_a_group_with_a_file_missing_before_its_first_scene
     code, out, err = run_cli(capsys, "evaluate", "middlebury2005", "--data", str(tmp_path), "--methods", "sgbm")
     assert code == 5 and out == ""
     assert err == f"nfdepth: error: scene 'middlebury2005/Books': data file missing: '{tmp_path / 'middlebury2005' / 'Books' / 'view6.png'}' (check the data folder, or download it with `nfdepth fetch-data`)\n"
+
+
+@needs_cli
+def test_cli_evaluate_refuses_a_directory_in_a_files_place_as_unreadable_before_its_first_scene(capsys, tmp_path):
+    """A directory where a scene file belongs is 'cannot read' (exit 3), as loading the scene says, not 'missing' (exit 5)."""
+    _touch_scene(tmp_path, "middlebury2005/Art", _MB2005_FILES)  # would run first (and fail: not images)
+    _touch_scene(tmp_path, "middlebury2005/Books", _MB2005_FILES[:-1])
+    (tmp_path / "middlebury2005" / "Books" / "view6.png").mkdir()
+    code, out, err = run_cli(capsys, "evaluate", "middlebury2005", "--data", str(tmp_path), "--methods", "sgbm")
+    assert code == 3 and out == ""
+    view6 = tmp_path / "middlebury2005" / "Books" / "view6.png"
+    assert err == f"nfdepth: error: scene 'middlebury2005/Books': cannot read '{view6}': it is a directory, not a file; is the data folder intact?\n"
+    # an absent file is still named first, as missing
+    (tmp_path / "middlebury2005" / "Books" / "view5.png").unlink()
+    code, _, err = run_cli(capsys, "evaluate", "middlebury2005", "--data", str(tmp_path), "--methods", "sgbm")
+    assert code == 5 and err.startswith("nfdepth: error: scene 'middlebury2005/Books': data file missing: ") and "view5.png" in err and "view6" not in err
 
 
 @needs_cli

@@ -810,3 +810,83 @@ def test_point_cloud_principal_point_is_a_number():
         depth_to_points(np.ones((4, 4)), focal_px=100.0, cx_px="a")
     with pytest.raises(ValueError, match=r"^cy_px must be a finite number, got inf$"):
         depth_to_points(np.ones((4, 4)), focal_px=100.0, cy_px=float("inf"))
+
+
+def test_a_complete_jpeg_with_bytes_after_its_end_is_read(tmp_path):
+    """A trailer after the end-of-image marker (a phone's motion photo appends a video there) was 'truncated JPEG'."""
+    rng = np.random.default_rng(4)
+    img = cv2.GaussianBlur((rng.random((48, 64)) * 255).astype(np.uint8), (0, 0), 2)
+    p = tmp_path / "a.jpg"
+    for params in ([], [cv2.IMWRITE_JPEG_PROGRESSIVE, 1], [cv2.IMWRITE_JPEG_RST_INTERVAL, 2]):
+        assert cv2.imwrite(str(p), img, params)
+        data = p.read_bytes()
+        want = read_image(p)
+        for trailer in (b"\n", b"\0" * 7, rng.bytes(4096), b"\xff\xd8\xff\xe1" + rng.bytes(300) + b"\xff\xd9"):
+            p.write_bytes(data + trailer)
+            np.testing.assert_array_equal(read_image(p), want)
+        # cut anywhere inside, it is refused, also when what is left ends in FF D9 by chance
+        for cut in (len(data) // 3, len(data) - 40, len(data) - 3):
+            p.write_bytes(data[:cut])
+            with pytest.raises(ImageReadError, match="truncated JPEG"):
+                read_image(p)
+        scan = data.rindex(b"\xff\xda")
+        p.write_bytes(data[: scan + 30] + b"\xff\xd9")  # the scan cut short, then an end marker: refused all the same
+        with pytest.raises(ImageReadError, match="truncated JPEG|damaged JPEG"):
+            read_image(p)
+
+
+def test_a_tiff_that_cannot_be_read_is_an_image_read_error(tmp_path, monkeypatch):
+    """A TIFF the system refuses to read was a raw PermissionError (the CLI: 'cannot write', exit 4)."""
+    import pathlib
+
+    p = tmp_path / "denied.tif"
+    tifffile.imwrite(p, np.zeros((4, 4), np.uint8))
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tifffile, "TiffFile", refuse)
+    monkeypatch.setattr(pathlib.Path, "read_bytes", refuse)
+    with pytest.raises(ImageReadError, match=r"^cannot read image '.*denied\.tif': Permission denied$"):
+        read_image(p)
+
+
+def test_write_array_npy_keeps_wide_floats_and_refuses_what_it_cannot_hold(tmp_path):
+    """Big-endian float64 and long double were written as float32: 1e300 became inf."""
+    a = _ramp().astype(np.float64) * 1e298
+    for dtype in (">f8", np.longdouble):
+        p = write_array(tmp_path / "w.npy", a.astype(dtype), force=True)
+        b = np.load(p)
+        assert b.dtype == np.float64
+        np.testing.assert_array_equal(b, a)
+    b = np.load(write_array(tmp_path / "h.npy", (a / 1e298).astype(">f4")))  # other floats: float32
+    assert b.dtype == np.float32
+    np.testing.assert_array_equal(b, _ramp())
+    if np.finfo(np.longdouble).max > np.finfo(np.float64).max:
+        huge = np.full((2, 2), np.longdouble(10) ** 400)
+        with pytest.raises(ValueError, match=r"^a value of 1\.00e\+400 does not fit a float64 output \(about 1e-308 to 1\.8e308\): rescale the map$"):
+            write_array(tmp_path / "x.npy", huge)
+        assert not (tmp_path / "x.npy").exists()
+
+
+def test_colormap_png_one_end_given_beyond_the_data(tmp_path):
+    """vmin=20 on values 0..10 said 'vmax must be >= vmin, got vmin=20.0, vmax=10.0': a vmax never given."""
+    from matplotlib import colormaps
+
+    a = np.linspace(0.0, 10.0, 12).reshape(3, 4)
+    low, mid, high = (np.array(colormaps["turbo"](v, bytes=True)[:3]) for v in (0.0, 0.5, 1.0))
+
+    def drawn(**limits):
+        p = write_colormap_png(tmp_path / "m.png", a, force=True, **limits)
+        return cv2.imread(str(p))[..., ::-1]
+
+    assert (drawn(vmin=20.0) == low).all()  # every value below vmin
+    assert (drawn(vmax=-5.0) == high).all()  # every value above vmax
+    img = drawn(vmin=5.0, vmax=5.0)  # one value: below it low, above it high
+    assert (img[a < 5] == low).all() and (img[a > 5] == high).all()
+    b = a.copy()
+    b[0, 0] = 5.0
+    p = write_colormap_png(tmp_path / "n.png", b, vmin=5.0, vmax=5.0)
+    assert (cv2.imread(str(p))[0, 0, ::-1] == mid).all()
+    with pytest.raises(ValueError, match=r"^vmax must be >= vmin, got vmin=3\.0, vmax=1\.0$"):
+        write_colormap_png(tmp_path / "r.png", a, vmin=3, vmax=1)

@@ -646,15 +646,22 @@ def _few(items, most: int = 3) -> str:
 
 
 def _complete(root: Path, names: list) -> tuple:
-    """``(root, names)`` once every file of every named scene is there: a missing one is found before the first scene runs."""
-    from .datasets import DataNotFoundError, missing_scene_files
+    """``(root, names)`` once every file of every named scene is there: a missing one is found before the first scene runs.
+
+    An absent file is a :class:`~nfdepth.datasets.DataNotFoundError`; a
+    directory (or another non-file) in a file's place a
+    :class:`~nfdepth.datasets.DataFileError`, as loading the scene reports it.
+    """
+    from .datasets import DataNotFoundError, _require, missing_scene_files
 
     for name in names:
         missing = missing_scene_files(name, root)
-        if missing:
-            listed = _few(f"'{p}'" for p in missing)
-            msg = f"scene {name!r}: data file{'s' if len(missing) > 1 else ''} missing: {listed} (check the data folder, or download it with `nfdepth fetch-data`)"
+        absent = [p for p in missing if not p.exists()]
+        if absent:
+            listed = _few(f"'{p}'" for p in absent)
+            msg = f"scene {name!r}: data file{'s' if len(absent) > 1 else ''} missing: {listed} (check the data folder, or download it with `nfdepth fetch-data`)"
             raise DataNotFoundError(msg)
+        _require(name, missing)  # what is left is there but not a file
     return root, names
 
 
@@ -666,7 +673,7 @@ def _warn_incomplete(root: Path, present: list) -> list:
         if name not in present and (Path(root) / sub).is_dir():
             missing = missing_scene_files(name, root)
             warnings.warn(
-                f"scene {name!r} skipped: its folder '{Path(root) / sub}' lacks {_few(p.name for p in missing)}",
+                f"scene {name!r} skipped: its folder '{Path(root) / sub}' lacks {_few(p.name + (' (not a file)' if p.exists() else '') for p in missing)}",
                 UserWarning,
                 stacklevel=3,
             )

@@ -278,8 +278,51 @@ _DECODER_PREFIXES = ("Corrupt JPEG data", "Premature end of JPEG file", "libpng"
 _HARMLESS_JPEG = ("extraneous bytes before marker",)
 
 
+def _jpeg_complete(data: bytes) -> bool:
+    """Whether a JPEG's marker structure (ITU T.81, annex B) reaches its end-of-image marker.
+
+    Walks the segments from the start-of-image marker; inside a scan's
+    entropy-coded data ``FF 00`` (a stuffed byte) and ``FF D0`` .. ``FF D7``
+    (restarts) are data, any other ``FF xx`` is the next marker. Bytes after
+    the end-of-image marker (phones' motion photos append a video there,
+    some writers metadata or padding) are not the image's: a complete image
+    with them is complete, a cut one (even if its trailer happens to hold
+    ``FF D9``) is not.
+    """
+    n, i = len(data), 2
+    if not data.startswith(b"\xff\xd8"):
+        return False
+    while i + 1 < n:
+        if data[i] != 0xFF:
+            return False  # not a marker where one belongs: damaged
+        marker = data[i + 1]
+        if marker == 0xFF:  # fill byte before a marker
+            i += 1
+            continue
+        if marker == 0xD9:
+            return True
+        if 0xD0 <= marker <= 0xD7 or marker == 0x01:  # no length
+            i += 2
+            continue
+        if i + 3 >= n:
+            return False
+        i += 2 + int.from_bytes(data[i + 2 : i + 4], "big")
+        if marker == 0xDA:  # entropy-coded data up to the next marker
+            while True:
+                j = data.find(b"\xff", i)
+                if j < 0 or j + 1 >= n:
+                    return False
+                following = data[j + 1]
+                if following == 0x00 or 0xD0 <= following <= 0xD7 or following == 0xFF:
+                    i = j + 1 if following == 0xFF else j + 2
+                    continue
+                i = j
+                break
+    return False
+
+
 def _decode_cv2(path: Path, data: bytes, ext: str) -> np.ndarray:
-    if ext in (".jpg", ".jpeg") and not data.rstrip(b"\0").endswith(b"\xff\xd9"):
+    if ext in (".jpg", ".jpeg") and not _jpeg_complete(data):
         raise _read_error(path, "truncated JPEG (no end-of-image marker)")
     previous = None
     # keep OpenCV's own log quiet; the error below says what went wrong
@@ -336,8 +379,8 @@ def _decode_tiff(path: Path) -> np.ndarray:
         raise
     except Exception as exc:  # tifffile raises several types on broken files
         reason = f"{type(exc).__name__}: {exc}"
+        data = _read_bytes(path)  # a file that cannot be read (permissions) is said as such
         try:  # a compression tifffile reads only with the optional imagecodecs (LZW, OpenCV's own default): OpenCV reads it
-            data = path.read_bytes()
             return _decode_cv2(path, data, ".tif")
         except ImageReadError:
             pass
@@ -550,7 +593,11 @@ def make_output_folder(path, *, parents: bool = False) -> Path:
             raise OutputWriteError(f"cannot write '{path}': {problem}")
         try:
             path.mkdir()
-        except OSError as exc:  # a file there, a read-only or virtual parent (/proc)
+        except FileExistsError:  # made meanwhile (another thread's figure): it is not this run's to remove
+            if not path.is_dir():
+                raise OutputWriteError(f"cannot write '{path}': it exists and is not a directory") from None
+            return path
+        except OSError as exc:  # a read-only or virtual parent (/proc)
             raise OutputWriteError(f"cannot write '{path}': {exc.strerror or exc}") from None
         if COMPLETED_WRITES is not None:
             COMPLETED_WRITES.append((path, False))
@@ -723,8 +770,9 @@ def write_array(path, array, *, force: bool = False) -> Path:
     ----------
     path : str or os.PathLike
         ``.pfm`` (float32, Middlebury PFM), ``.tif``/``.tiff`` (float32
-        TIFF) or ``.npy`` (float32 unless the array is float64, which is
-        kept).
+        TIFF) or ``.npy`` (float32 unless the array is float64 or wider,
+        which is stored as float64). A finite value the stored type cannot
+        hold is refused, not written as inf or 0.
     array : array_like, shape (H, W)
         The map; NaN marks unknown values and is stored as NaN.
     force : bool, keyword-only
@@ -751,7 +799,15 @@ def write_array(path, array, *, force: bool = False) -> Path:
         payload = _pfm_bytes(arr)
         return atomic_write(path, lambda fh: fh.write(payload), force=force)
     if ext == ".npy":
-        out = arr if arr.dtype == np.float64 else arr.astype(np.float32)
+        # float64 kept (native byte order); a wider or non-native float stored as float64, the rest as float32
+        wide = arr.dtype.kind == "f" and arr.dtype.itemsize >= 8
+        with np.errstate(over="ignore"):
+            out = arr.astype(np.float64) if wide else _float32_payload(arr, ext)
+        lost = np.isfinite(arr) & ~np.isfinite(out) if wide else None
+        if lost is not None and lost.any():  # a long double beyond float64's range
+            worst = np.format_float_scientific(np.max(np.abs(arr[lost])), precision=2, unique=False)
+            msg = f"a value of {worst} does not fit a float64 output (about 1e-308 to 1.8e308): rescale the map"
+            raise ValueError(msg)
         return atomic_write(path, lambda fh: np.save(fh, out, allow_pickle=False), force=force)
     import io as _io
 
@@ -781,7 +837,10 @@ def write_colormap_png(path, array, *, vmin=None, vmax=None, cmap: str = "turbo"
         The map. NaN and +-inf are drawn black.
     vmin, vmax : float, optional, keyword-only
         Values mapped to the ends of the colour map; default the finite
-        minimum and maximum. Values outside are clipped.
+        minimum and maximum (an end not given never crosses the one given:
+        ``vmin=20`` on values 0..10 draws all of them at the low end).
+        Values outside are clipped; with ``vmin == vmax``, values below are
+        the low end, above the high end, equal the middle colour.
     cmap : str, keyword-only
         A Matplotlib colour map name (``matplotlib.colormaps``).
     force : bool, keyword-only
@@ -801,11 +860,16 @@ def write_colormap_png(path, array, *, vmin=None, vmax=None, cmap: str = "turbo"
     finite = np.isfinite(arr)
     lo = check_finite("vmin", vmin) if vmin is not None else (float(arr[finite].min()) if finite.any() else 0.0)
     hi = check_finite("vmax", vmax) if vmax is not None else (float(arr[finite].max()) if finite.any() else 1.0)
-    if hi < lo:
+    if vmin is not None and vmax is not None and hi < lo:
         msg = f"vmax must be >= vmin, got vmin={lo!r}, vmax={hi!r}"
         raise ValueError(msg)
+    # one end given beyond the data's other end: the default end follows it (as plot.colormap_panel does)
+    lo, hi = (min(lo, hi), hi) if vmin is None else (lo, max(lo, hi))
     with np.errstate(invalid="ignore"):
-        norm = np.full(arr.shape, 0.5) if hi == lo else np.clip((arr - lo) / (hi - lo), 0.0, 1.0)
+        if hi == lo:  # one value: below it the low end, above it the high end, at it the middle
+            norm = np.where(arr < lo, 0.0, np.where(arr > hi, 1.0, 0.5))
+        else:
+            norm = np.clip((arr - lo) / (hi - lo), 0.0, 1.0)
     norm[~finite] = 0.0
     rgb = colormaps[cmap](norm, bytes=True)[..., :3].copy()
     rgb[~finite] = 0
