@@ -1236,3 +1236,135 @@ def test_crossings_refusals_name_the_argument():
         check_crossings([5, 5])  # bare, for a caller that names the value (rig file, --crossings)
     with pytest.raises(ValueError, match=r"^crossing must be an integer >= 2, got 1$"):
         interleaved_frames([np.zeros((4, 4))] * 9, [np.zeros((4, 4))] * 9, 1)
+
+
+def test_a_video_file_whose_name_has_brackets_is_read_as_itself(tmp_path, scene):
+    """'clip[1].avi' was taken as a glob: refused (no file matched), or 'clip1.avi', another video, read without a word."""
+    named = _write_avi(tmp_path / "clip[1].avi", scene.frames[:4])
+    _write_avi(tmp_path / "clip1.avi", scene.frames[4:6])  # what the pattern matches
+    source = read_video(named)
+    assert source.video == named and source.paths is None
+    got = list(source)
+    assert len(got) == 4 and np.median(np.abs(got[1] - scene.frames[1])) < 3  # its own frames
+    assert read_video(str(tmp_path / "clip[1-9].avi")).paths == [tmp_path / "clip1.avi"]  # no file of that name: a pattern, as before
+
+
+def _one_buffer(frames):
+    """``frames`` handed over in one reused buffer, as ``cv2.VideoCapture.read(buf)`` does."""
+    buf = np.empty_like(np.asarray(frames[0], np.float32))
+    for f in frames:
+        buf[...] = f
+        yield buf
+
+
+def test_a_reader_that_reuses_one_buffer_gives_the_same_depths(scene, pair):
+    """The windows kept the caller's float32 arrays: with one reused buffer every frame of a triple was the newest one,
+    no depth at all and a warning that the edge points lay behind the camera."""
+    from nfdepth.video import dynamic_stereo_from_videos
+
+    frames = [np.asarray(f, np.float32) for f in scene.frames[:6]]
+    fresh = list(depth_from_video(frames, camera=scene.camera, velocity=STEP))
+    reused = list(depth_from_video(_one_buffer(frames), camera=scene.camera, velocity=STEP))
+    assert [r.index for r in reused] == [r.index for r in fresh] == [1, 2, 3, 4]
+    for a, b in zip(fresh, reused):
+        assert np.isfinite(a.inverse_depth).sum() > 300
+        np.testing.assert_array_equal(b.inverse_depth, a.inverse_depth)
+        np.testing.assert_array_equal(b.measured_inverse_depth_std, a.measured_inverse_depth_std)
+    moving, reference = ([np.asarray(f, np.float32) for f in video[:9]] for video in pair[:2])
+    truth = pair[2]
+    want = next(dynamic_stereo_from_videos(moving, reference, rig=load_rig(PAPER_RIG), crossings=[4]))
+    got = next(dynamic_stereo_from_videos(_one_buffer(moving), _one_buffer(reference), rig=load_rig(PAPER_RIG), crossings=[4]))
+    assert want.valid.sum() > 500 and np.median(_rel_errors(truth, got)) < 0.005
+    np.testing.assert_array_equal(got.depth, want.depth)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"velocity": "abc"}, r"^velocity must be numbers \(the camera translation per frame, x y z\), got 'abc' \(dtype <U3\)$"),
+        ({"velocity": {1, 2, 3}}, r"^velocity must be numbers \(.*\), got \{1, 2, 3\} \(dtype object\)$"),
+        ({"velocity": [[1, 0], [0]]}, r"^velocity must be numbers \(.*\), got \[\[1, 0\], \[0\]\] \(rows of unequal length\)$"),
+        ({"velocity": [1j, 0, 0]}, r"^velocity must be numbers \(.*\), got \[1j, 0, 0\] \(dtype complex128\)$"),
+        ({"positions": [["a", "b", "c"]] * 3}, r"^positions must be numbers \(the camera's optical centre at every frame, shape \(N, 3\)\), got .* \(dtype <U1\)$"),
+        ({"positions": [[0, 0, 0], [1, 0], [2, 0, 0]]}, r"^positions must be numbers \(.*\), got .* \(rows of unequal length\)$"),
+        ({"positions": np.arange(9).reshape(3, 3) * 1j}, r"^positions must be numbers \(.*\), got an array \(dtype complex128\)$"),
+        ({"positions": [[None] * 3] * 3}, r"^positions must be numbers \(.*\), got .* \(dtype object\)$"),
+    ],
+)
+def test_motion_that_is_no_numbers_is_named(kwargs, match):
+    """Were NumPy's own 'could not convert string to float', 'inhomogeneous shape', 'float() argument ... not set', or a
+    ComplexWarning and then 'the camera does not move' (the imaginary positions dropped)."""
+    with pytest.raises(TypeError, match=match):
+        depth_from_video(_untouched(), camera=synthetic.paper_camera(), **kwargs)
+
+
+def test_videos_library_refuses_a_frame_that_is_no_image(pair):
+    """Was 'IndexError: tuple index out of range' from the size check; a frame of another size keeps its message."""
+    from nfdepth.video import dynamic_stereo_from_videos
+
+    moving, reference, _ = pair
+    rig = load_rig(PAPER_RIG)
+    for bad, error, match in [
+        (None, TypeError, r"^moving frame 0 must be a numeric 2-D array, got dtype object$"),
+        ("abc", TypeError, r"^moving frame 0 must be a numeric 2-D array, got dtype <U3$"),
+        (np.float32(3.0), ValueError, r"^moving frame 0 must be a 2-D grey image \(rows, cols\), got shape \(\)$"),
+        (np.zeros(200), ValueError, r"^moving frame 0 must be a 2-D grey image \(rows, cols\), got shape \(200,\)$"),
+        (np.zeros((100, 120)), RigError, r"^camera\.width_px x camera\.height_px = 200x200 \(paper_pyramid_rig\.toml\) does not match moving frame 0 \(120x100\)$"),
+    ]:
+        with pytest.raises(error, match=match):
+            list(dynamic_stereo_from_videos([bad] * 9, reference[:9], rig=rig, crossings=[4]))
+    with pytest.raises(TypeError, match=r"^reference frame 2 must be a numeric 2-D array, got dtype object$"):
+        list(dynamic_stereo_from_videos(moving[:9], reference[:2] + [None] * 7, rig=rig, crossings=[4]))
+
+
+def _write_ffv1_grey(path, frames, depth):
+    """``frames`` (uint8 or uint16) as a lossless grey FFV1 video; skips where this OpenCV build cannot write one."""
+    params = [cv2.VIDEOWRITER_PROP_DEPTH, depth, cv2.VIDEOWRITER_PROP_IS_COLOR, 0]
+    h, w = frames[0].shape
+    writer = cv2.VideoWriter(str(path), cv2.CAP_FFMPEG, cv2.VideoWriter_fourcc(*"FFV1"), 10, (w, h), params)
+    if not writer.isOpened():
+        pytest.skip("no FFV1 grey writer in this OpenCV build")
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    if not path.is_file() or path.stat().st_size == 0:
+        pytest.skip("this OpenCV build wrote no FFV1 grey video")
+    return path
+
+
+def test_a_16_bit_grey_video_keeps_its_values(tmp_path, scene):
+    """A lossless 16-bit grey FFV1 video came through OpenCV's 8-bit BGR: its first frame's maximum 202 instead of
+    the stored 51786 (49 grey levels of 5216). Its frames are now its values, as a 16-bit PNG's; 8-bit videos as before."""
+    stored = [np.round(np.asarray(f) * 200).astype(np.uint16) for f in scene.frames[:3]]  # 255 + noise fits in 16 bits
+    deep = _write_ffv1_grey(tmp_path / "g16.mkv", stored, cv2.CV_16U)
+    got = list(read_video(deep))
+    assert len(got) == 3 and all(g.dtype == np.float32 and g.shape == (200, 200) for g in got)
+    for g, s in zip(got, stored):
+        assert s.max() > 40000
+        np.testing.assert_array_equal(g, s.astype(np.float32))
+    # the same frames through the 16-bit PNGs of a folder: the same values
+    folder = tmp_path / "png"
+    folder.mkdir()
+    for k, s in enumerate(stored):
+        assert cv2.imwrite(str(folder / f"f{k}.png"), s)
+    for g, p in zip(got, read_video(folder)):
+        np.testing.assert_array_equal(g, p)
+    shallow = [np.clip(np.round(np.asarray(f)), 0, 255).astype(np.uint8) for f in scene.frames[:3]]
+    for g, s in zip(read_video(_write_ffv1_grey(tmp_path / "g8.mkv", shallow, cv2.CV_8U)), shallow):
+        np.testing.assert_allclose(g, s, atol=1e-3)  # lossless 8 bits (through OpenCV's BGR and BT.601 luma), no warning
+
+
+@pytest.mark.parametrize(
+    ("tag", "bits"),
+    [
+        (b"Y1\x00\x10", 16), (b"\x10\x001Y", 16), (b"Y1\x00\x0a", 10), (b"Y3\x0b\x0a", 10), (b"\x0c\x0a3Y", 12), (b"G3\x00\x0c", 12),
+        (b"Y4\x00\x10", 16), (b"RGB0", 16), (b"0BGR", 16), (b"RBA@", 16), (b"@BRA", 16),
+        (b"I420", 8), (b"Y800", 8), (b"BGRA", 8), (b"RGB\x18", 8), (b"BGR\x00", 8), (b"\x00RGB", 8), (b"Y41B", 8), (b"Y4\x0b\x08", 8),
+    ],
+)
+def test_the_bits_of_a_decoded_pixel_format(tag, bits):
+    """FFmpeg's tags of its raw pixel formats (libavcodec/raw.c; ``'0'`` is 48, ``'@'`` 64): those deeper than 8 bits,
+    which OpenCV would read at 8 bits, are warned of (gray16le is read as it is)."""
+    from nfdepth.video import _stored_bits
+
+    assert _stored_bits(int.from_bytes(tag, "little")) == bits

@@ -203,7 +203,15 @@ def _cmd_dynamic(args) -> int:
     write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=_unit(args))
     ok = result.valid
     if "ply" in outs:
-        img = to_rgb8(read_image(args.images[2], grey=False, dtype=None))  # 16-bit or float input: stretched to 8 bits
+        img = read_image(args.images[2], grey=False, dtype=None)
+        if any(rig.distortion):  # colours on the undistorted grid of the points, as the depths (each channel as the grey I3)
+            planes = img.reshape(*img.shape[:2], -1)
+            planes = np.stack([rig.undistort(planes[..., c]) for c in range(planes.shape[-1])], axis=-1)
+            if img.dtype.kind in "iu":
+                info = np.iinfo(img.dtype)
+                planes = np.clip(np.rint(planes), info.min, info.max).astype(img.dtype)
+            img = planes.reshape(img.shape)
+        img = to_rgb8(img)  # 16-bit or float input: stretched to 8 bits
         ii = np.floor(result.rows[ok]).astype(int)
         jj = np.floor(result.cols[ok]).astype(int)
         write_ply(outs["ply"], result.points[ok].astype(np.float32), colors=img[ii, jj], force=args.force)

@@ -83,6 +83,7 @@ import inspect
 import math
 import os
 import re
+import reprlib
 import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -110,6 +111,7 @@ from ._validate import (
     check_noise_std,
     check_scale_px,
     check_threshold,
+    is_real_numeric,
 )
 from .camera import PinholeCamera
 from .depth import Reason
@@ -196,6 +198,30 @@ def _no_edge_points_in_frames(first: NoEdgePointsWarning, frames: list, triples:
 #: A video file that decodes fewer than this share of the frames its container declares is reported (a truncated file).
 _DECODED_SHARE = 0.9
 
+#: FFmpeg's tag of 16-bit little-endian grey (``CAP_PROP_CODEC_PIXEL_FORMAT``, e.g. a 16-bit FFV1 video): the one
+#: format deeper than 8 bits that OpenCV hands over as decoded (uint16) when told not to convert it to 8-bit BGR.
+_GRAY16LE = int.from_bytes(b"Y1\x00\x10", "little")
+
+
+def _stored_bits(tag: int) -> int:
+    """Bits per sample of a decoded video's pixel format, from FFmpeg's tag of it (``CAP_PROP_CODEC_PIXEL_FORMAT``); 8 where
+    it is 8 or less, or unknown.
+
+    Reads the tags of FFmpeg's raw formats (libavcodec/raw.c) deeper than 8 bits: grey, YUV(A) and planar RGB(A)
+    (``'Y1' 0 16``: gray16le, ``'Y3' 11 10``: yuv420p10le, ``'G3' 0 12``, ...; big-endian: the bytes reversed), and packed
+    48-bit RGB and 64-bit RGBA (``'RGB' 48``, ``'RBA' 64``; big-endian: the bits first, ``48 'RGB'``).
+    """
+    if not 0 < tag < 1 << 32:  # (0 or -1: the backend does not say)
+        return 8
+    b = int(tag).to_bytes(4, "little")
+    for planar in (b, b[::-1]):
+        if planar[:2] in (b"Y1", b"Y2", b"Y3", b"Y4", b"G3", b"G4") and planar[2] in (0, 10, 11) and 8 < planar[3] <= 16:
+            return planar[3]
+    for letters, bits in ((b[:3], b[3]), (b[1:], b[0])):
+        if (letters in (b"RGB", b"BGR") and bits == 48) or (letters in (b"RBA", b"BRA") and bits == 64):
+            return 16
+    return 8
+
 
 class FrameSource:
     """Grey float32 frames of a video file or an image sequence, iterable once per ``iter``.
@@ -230,6 +256,16 @@ class FrameSource:
         if not cap.isOpened():
             raise ImageReadError(f"cannot read video '{self.video}': OpenCV could not open it")
         try:
+            tag = int(cap.get(cv2.CAP_PROP_CODEC_PIXEL_FORMAT))
+            if tag == _GRAY16LE:  # its values as stored (0..65535, as a 16-bit PNG's), not OpenCV's 8-bit BGR of them
+                cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+            elif _stored_bits(tag) > 8:
+                warnings.warn(
+                    f"video '{self.video}' stores {_stored_bits(tag)}-bit samples, which OpenCV reads at 8 bits: the frames"
+                    " lose their finer intensity steps; a 16-bit grey video (FFV1) or 16-bit PNG frames keep them",
+                    UserWarning,
+                    stacklevel=2,
+                )
             count = 0
             while True:
                 ok, frame = cap.read()
@@ -260,10 +296,13 @@ def read_video(path) -> FrameSource:
     ----------
     path : str or os.PathLike
         A video file (:data:`VIDEO_EXTENSIONS`, read with ``cv2.VideoCapture``,
-        colour converted with BT.601 luma), a folder of images
+        colour converted with BT.601 luma; a 16-bit grey stream, e.g. FFV1,
+        keeps its values 0..65535 as a 16-bit PNG does, other streams deeper
+        than 8 bits are read at 8 bits with a ``UserWarning``), a folder of images
         (:data:`nfdepth.io.READ_EXTENSIONS`), or a glob such as
-        ``"frames/*.png"``. Image sequences are sorted naturally
-        (``f2.png`` before ``f10.png``).
+        ``"frames/*.png"`` (only where no file or folder has that name:
+        ``clip[1].avi`` is read as itself). Image sequences are sorted
+        naturally (``f2.png`` before ``f10.png``).
 
     Returns
     -------
@@ -290,7 +329,7 @@ def read_video(path) -> FrameSource:
         if not files:
             raise ImageReadError(f"cannot read frames from '{p}': the folder has no image files ({', '.join(READ_EXTENSIONS)})")
         return FrameSource(paths=sorted(files, key=_natural_key))
-    if any(ch in text for ch in "*?["):
+    if not p.exists() and any(ch in text for ch in "*?["):  # a file named 'clip[1].avi' is itself, not a pattern
         files = [Path(f) for f in _glob.glob(text) if Path(f).is_file()]
         if not files:
             raise ImageReadError(f"cannot read frames from '{text}': the pattern matches no files")
@@ -528,7 +567,7 @@ def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None)
         _check_spec_moves(rig.video, rig)
         return rig.video
     if velocity is not None:
-        v = np.asarray(velocity, dtype=float)
+        v = _numbers("velocity", velocity, "the camera translation per frame, x y z")
         if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.any(v):
             msg = f"velocity must be 3 finite numbers, not all zero (camera translation per frame), got {np.asarray(velocity).tolist()}"
             raise ValueError(msg)
@@ -540,7 +579,7 @@ def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None)
             )
             raise ValueError(msg)
         return VideoSpec(velocity=v)
-    p = np.asarray(positions, dtype=float)
+    p = _numbers("positions", positions, "the camera's optical centre at every frame, shape (N, 3)")
     if p.ndim != 2 or p.shape[1] != 3 or not np.all(np.isfinite(p)):
         msg = f"positions must have shape (N, 3) with finite values, got shape {p.shape}"
         raise ValueError(msg)
@@ -549,13 +588,7 @@ def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None)
     if orientations_rad is None:
         return VideoSpec(positions=p)
     expected = f"{p.shape[0]} camera-to-world rotation vectors in radians, shape {p.shape} as positions"
-    try:
-        o = np.asarray(orientations_rad)
-        if o.dtype.kind not in "biuf":
-            raise TypeError(f"array of {o.dtype}")
-        o = o.astype(float)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"orientations_rad must be numbers ({expected}), got {exc}") from None
+    o = _numbers("orientations_rad", orientations_rad, expected)
     if o.shape != p.shape or not np.all(np.isfinite(o)):
         msg = f"orientations_rad must have the shape of positions, {p.shape}, with finite values ({expected}), got shape {o.shape}"
         raise ValueError(msg)
@@ -568,6 +601,18 @@ def _positions_from(rig: Rig | None, velocity, positions, orientations_rad=None)
         )
         raise ValueError(msg)
     return VideoSpec(positions=p, orientations_deg=np.rad2deg(o))
+
+
+def _numbers(name: str, value, expected: str) -> np.ndarray:
+    """``value`` as a float64 array; a TypeError naming ``name`` and what was ``expected`` for text, objects, complex numbers or ragged rows."""
+    shown = "an array" if isinstance(value, np.ndarray) else reprlib.repr(value)
+    try:
+        arr = np.asarray(value)
+    except ValueError:  # NumPy's "inhomogeneous shape"
+        raise TypeError(f"{name} must be numbers ({expected}), got {shown} (rows of unequal length)") from None
+    if not is_real_numeric(arr):  # (NumPy would drop an imaginary part with a warning)
+        raise TypeError(f"{name} must be numbers ({expected}), got {shown} (dtype {arr.dtype})")
+    return arr.astype(float)
 
 
 #: A triple whose step (half the distance between the positions one frame before and
@@ -834,7 +879,8 @@ def depth_from_video(
     ------
     TypeError
         At the call: no camera, no motion (none of ``rig``, ``velocity``,
-        ``positions``), an option of the wrong type.
+        ``positions``), an option of the wrong type (``velocity``,
+        ``positions`` or ``orientations_rad`` that are not real numbers).
     RigError, ValueError
         At the call (the frames are not read yet): more than one motion,
         ``orientations_rad`` without ``positions`` or of another shape,
@@ -948,7 +994,7 @@ def _video_depths(
     behind_points = determinable_points = 0
     triples = 0
     for n, frame in enumerate(frames):
-        img = as_image(f"frame {first + n}", frame, dtype=np.float32)
+        img = _own_image(f"frame {first + n}", frame)
         if img.shape != cam.shape:
             if rig is not None and camera is None:
                 rig.check_image_shape(img.shape, what=f"frame {first + n}")
@@ -1243,6 +1289,19 @@ def _video_depths(
         )
 
 
+def _own_image(name: str, frame) -> np.ndarray:
+    """:func:`as_image` of ``frame`` (float32), copied where it is the caller's own memory, to be kept for later frames.
+
+    A reader may hand every frame in one buffer (``cv2.VideoCapture.read(buf)``):
+    a window holding the caller's arrays would see all its frames turn into the
+    newest one (no motion). Where the conversion to float32 made a copy, that
+    copy is kept as it is.
+    """
+    given = np.asarray(frame)
+    img = as_image(name, given, dtype=np.float32)
+    return img.copy() if np.may_share_memory(img, given) else img
+
+
 def _empty_frame(shape, index: int, position: np.ndarray, baseline: float, *, dense: bool) -> VideoDepthFrame:
     """A frame with no estimate yet (a static triple before the camera first moves)."""
     nan = np.full(shape, np.nan, dtype=np.float32)
@@ -1518,10 +1577,9 @@ def _crossing_depths(moving, reference, *, rig, wanted, shared, match_exposure, 
     r_win: list = []
     n = 0
     for n, (m, r) in enumerate(zip(moving, reference)):
-        for what, f in (("moving", m), ("reference", r)):
-            rig.check_image_shape(np.shape(f), what=f"{what} frame {n}")
-        m_win.append(as_image(f"moving frame {n}", m, dtype=np.float32))
-        r_win.append(as_image(f"reference frame {n}", r, dtype=np.float32))
+        for what, f, win in (("moving", m, m_win), ("reference", r, r_win)):
+            win.append(_own_image(f"{what} frame {n}", f))  # a 2-D array of finite numbers first: its size is read next
+            rig.check_image_shape(win[-1].shape, what=f"{what} frame {n}")
         m_win, r_win = m_win[-keep:], r_win[-keep:]
         while pending and pending[0] + 2 == n:
             c = pending.pop(0)
