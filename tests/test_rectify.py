@@ -167,12 +167,82 @@ def test_bad_cameras_are_refused():
             CalibratedCamera(**{**good, key: value})
 
 
+def test_a_skewed_pixel_grid_is_refused():
+    """OpenCV's undistortPoints and initUndistortRectifyMap read fx, fy, cx, cy alone: a skew of 20 px put the top
+    left pixel's ray 2.97 px (reprojected through the matrix) off the pinhole's; such a matrix is refused."""
+    k = [[400.0, 20.0, 89.5], [0.0, 400.0, 59.5], [0.0, 0.0, 1.0]]
+    with pytest.raises(ValueError, match=r"^matrix has a skewed pixel grid \(matrix\[0, 1\] = 20\): expected 0 \(OpenCV's lens model"):
+        CalibratedCamera(matrix=k, width_px=SHAPE[1], height_px=SHAPE[0], position=np.zeros(3), rotation=np.eye(3))
+
+
+def test_no_distortion_may_be_given_as_none():
+    """OpenCV takes None for no distortion; it was read as [nan] and refused. Now it is none: every ray is the
+    pinhole's ((col - cx) / fx, (row - cy) / fy), as with the coefficients left out."""
+    k = np.array([[400.0, 0.0, 89.5], [0.0, 390.0, 59.5], [0.0, 0.0, 1.0]])
+    plain = CalibratedCamera(matrix=k, width_px=SHAPE[1], height_px=SHAPE[0], position=np.zeros(3), rotation=np.eye(3))
+    none = CalibratedCamera(matrix=k, width_px=SHAPE[1], height_px=SHAPE[0], position=np.zeros(3), rotation=np.eye(3), distortion=None)
+    opencv = CalibratedCamera.from_opencv(k, None, np.zeros(3), np.zeros(3), (SHAPE[1], SHAPE[0]))
+    rows, cols = np.mgrid[0 : SHAPE[0], 0 : SHAPE[1]]
+    pinhole = np.stack([(cols - 89.5) / 400.0, (rows - 59.5) / 390.0], axis=-1)
+    for cam in (none, opencv):
+        assert cam == plain and cam.distortion.shape == (0,)
+        np.testing.assert_allclose(cam.rays(), pinhole, rtol=0, atol=1e-12)
+
+
 def test_pixels_whose_distortion_cannot_be_undone_get_no_ray():
     """A strong barrel distortion folds back beyond some radius: the far corners' rays are NaN, the centre's exact."""
     cam = camera(150.0, 89.5, 59.5, (0.0, 0.0, 0.0), distortion=(-0.9, 0.0, 0.0, 0.0))
     xy = cam.rays()
     assert np.isnan(xy[0, 0]).all() and np.isfinite(xy[60, 90]).all()
     assert np.isfinite(xy).all(axis=-1).mean() > 0.3
+
+
+def test_views_are_checked_before_resampling_under_their_given_index():
+    """One NaN pixel in given view 0 of a row given right to left: the cubic spline spread it over the whole rectified
+    view, and the error named view 2 with 21600 non-finite pixels; a complex view lost its imaginary part with a mere
+    ComplexWarning. Now each view is checked as static stereo checks its own, by its given index, before resampling."""
+    cams = default_row()
+    views, _ = render(cams)
+    views, cams = views[::-1], cams[::-1]
+    holed = [views[0].copy(), *views[1:]]
+    holed[0][10, 10] = np.nan
+    for run in (rectify_row, calibrated_row_depth):
+        with pytest.raises(ValueError, match=r"^views\[0\] contains 1 non-finite \(NaN or inf\) pixel\(s\); expected finite intensities$"):
+            run(holed, cams, reference=1)
+        with pytest.raises(TypeError, match=r"^views\[2\] must be real, got complex dtype complex128$"):
+            run([*views[:2], views[2].astype(np.complex128) + 50j], cams, reference=1)
+    with pytest.raises(TypeError, match=r"^views must be a sequence of 2-D arrays, one per camera, got int$"):
+        rectify_row(3, cams, reference=1)
+
+
+def test_static_stereos_warnings_number_the_views_as_given():
+    """Static stereo runs on the views sorted along the rectified row, and its warnings numbered them so: given as
+    right, left, middle (the reference, given view 2) with the left camera placed twice as far as it is, the row
+    said "reference view 1 ... at view 0 0.66, view 2 1.34 ... about 0, 1, 2, in the order given". They are said
+    again with the given indices: the misplaced camera's view (2/3 of the scene's disparity) is given view 1, and
+    the views, in the order given, lie at about 2, 0, 1 steps from the left one."""
+    import dataclasses
+
+    cams = default_row()
+    views, _ = render(cams)
+    far = dataclasses.replace(cams[0], position=2.0 * cams[0].position)
+    with pytest.warns(UserWarning) as caught:
+        r = calibrated_row_depth([views[2], views[0], views[1]], [cams[2], far, cams[1]], reference=2)
+    assert r.row.order == [1, 2, 0]
+    (said,) = [str(w.message) for w in caught if str(w.message).startswith("the views do not fit")]
+    m = re.search(r"paired with the reference view (\d) alone, .* at view (\d) ([0-9.]+), view (\d) ([0-9.]+) times its typical value", said)
+    assert m is not None, said
+    assert m.group(1) == "2"
+    scales = {int(m.group(2)): float(m.group(3)), int(m.group(4)): float(m.group(5))}
+    assert sorted(scales) == [0, 1] and abs(scales[1] / scales[0] - 0.5) < 0.03  # 2/3 against 4/3
+    assert re.search(r"at about 2, 0, 1, in the order given", said), said
+    # two views that are one image (cameras already rectified: no resampling), given as views 0 and 1 of 0, 2, 1 along the row
+    plain = [camera(400.0, 89.5, 59.5, (x, 0.0, 0.0)) for x in (-0.1, 0.1, 0.0)]
+    seen, _ = render(plain)
+    with pytest.warns(UserWarning) as caught:
+        calibrated_row_depth([seen[0], seen[0], seen[2]], plain, reference=2)
+    (same,) = [str(w.message) for w in caught if "the same image" in str(w.message)]
+    assert same.startswith("views 0 and 1 are the same image"), same
 
 
 # ------------------------------------------------------------------ the command
@@ -259,6 +329,26 @@ def test_cli_stereo_with_cameras_refuses_what_does_not_fit(capfd, tmp_path, row_
     code, _, err = run_cli(capfd, "stereo", names[0], small, names[2], "--cameras", cams, "--out", tmp_path / "x.tif")
     assert code == 2 and "view 1 'small.tif' is 90x60 px, its camera (camera[1]" in err
     assert not (tmp_path / "x.tif").exists()
+
+
+def test_cli_stereo_with_cameras_numbers_the_views_as_given(capfd, tmp_path, row_files):
+    """The views and cameras given as right, left, middle (``--reference 2``) with the left camera placed twice as far:
+    the warning named the views along the rectified row ("reference view 1 ... view 0 0.66, view 2 1.34"); now the
+    files' places on the command line (the left file is view 1, measuring 2/3 of the scene's disparity)."""
+    import dataclasses
+
+    from cli_runner import run_cli
+
+    from nfdepth.rectify import cameras_to_toml
+
+    _folder, names, _views, cams, _depths = row_files
+    far = dataclasses.replace(cams[0], position=2.0 * cams[0].position)
+    (tmp_path / "cams.toml").write_text(cameras_to_toml([cams[2], far, cams[1]]))
+    code, _, err = run_cli(capfd, "stereo", names[2], names[0], names[1], "--cameras", tmp_path / "cams.toml", "--reference", "2", "--out", tmp_path / "d.tif")
+    assert code == 0, err
+    (line,) = [x for x in err.splitlines() if "the views do not fit" in x]
+    assert re.search(r"paired with the reference view 2 alone, .* at view 1 0\.6\d, view 0 1\.3\d times its typical value", line), line
+    assert "at about 2, 0, 1, in the order given" in line, line
 
 
 def test_cameras_file_values_are_checked(tmp_path):
@@ -399,9 +489,6 @@ def test_cameras_to_toml_round_trips():
         np.testing.assert_array_equal(got.distortion, want.distortion)
         np.testing.assert_array_equal(got.position, want.position)
         np.testing.assert_allclose(got.rotation, want.rotation, rtol=0, atol=1e-13)
-    skewed = CalibratedCamera(matrix=[[400.0, 1.0, 90.0], [0.0, 400.0, 60.0], [0.0, 0.0, 1.0]], width_px=180, height_px=120, position=np.zeros(3), rotation=np.eye(3))
-    with pytest.raises(ValueError, match=r"cameras\[0\] has a skewed pixel grid \(matrix\[0, 1\] = 1\)"):
-        cameras_to_toml([skewed])
 
 
 def test_cameras_to_toml_refuses_no_cameras():
@@ -480,6 +567,41 @@ def test_a_row_and_a_column_fused():
         calibrated_grid_depth(rv, rc, cv, cc, row_reference=True, column_reference=1)
     with pytest.raises(TypeError, match=r"column_cameras must be a sequence of CalibratedCamera, one per view, got NoneType"):
         calibrated_grid_depth(rv, rc, cv, None, row_reference=1, column_reference=1)
+
+
+def test_a_grid_refuses_the_same_line_twice():
+    """The row given again as the column was fused with itself: each measurement counted twice, the std sqrt(2) too
+    small. Two lines within 30 degrees are refused (the column is there to measure the edges parallel to the row:
+    at 20 degrees it would do so with sin^2 20 = 0.12 of the weight of a column at right angles)."""
+    import dataclasses
+
+    from nfdepth.rectify import calibrated_grid_depth
+
+    (rv, rc), (cv, cc), _ = _grid()
+    with pytest.raises(ValueError, match=r"^the row's cameras \(row_cameras / --cameras, along \[-?1\.0, 0\.0, 0\.0\]\) and the column's \(column_cameras / --column-cameras, along \[-?1\.0, 0\.0, 0\.0\]\) lie on lines 0\.0 degrees apart: expected at least 30"):
+        calibrated_grid_depth(rv, rc, rv, rc, row_reference=1, column_reference=1)
+    a = np.radians(20.0)
+    slanted = [dataclasses.replace(c, position=t * np.array([np.cos(a), np.sin(a), 0.0])) for c, t in ((cc[0], -0.1), (cc[2], 0.1))]
+    with pytest.raises(ValueError, match=r" lie on lines 20\.0 degrees apart: expected at least 30 "):
+        calibrated_grid_depth(rv, rc, [cv[0], cv[1], cv[2]], [slanted[0], cc[1], slanted[1]], row_reference=1, column_reference=1)
+
+
+def test_a_grid_names_the_line_and_view_it_refuses():
+    """A NaN in the shared reference view was "the reference views must be the same image" (NaN != NaN); one in a
+    column view "views[2] contains 21600 non-finite pixel(s)", of no line. Now the view is named by its list and index."""
+    from nfdepth.rectify import calibrated_grid_depth
+
+    (rv, rc), (cv, cc), _ = _grid()
+    ref = rv[1].copy()
+    ref[5, 5] = np.nan
+    with pytest.raises(ValueError, match=r"^row_views\[1\] contains 1 non-finite \(NaN or inf\) pixel\(s\)"):
+        calibrated_grid_depth([rv[0], ref, rv[2]], rc, [cv[0], ref, cv[2]], cc, row_reference=1, column_reference=1)
+    holed = cv[2].copy()
+    holed[5, 5] = np.inf
+    with pytest.raises(ValueError, match=r"^column_views\[2\] contains 1 non-finite \(NaN or inf\) pixel\(s\)"):
+        calibrated_grid_depth(rv, rc, [cv[0], cv[1], holed], cc, row_reference=1, column_reference=1)
+    with pytest.raises(ValueError, match=r"^column: views\[2\] is 179x120 px"):
+        calibrated_grid_depth(rv, rc, [cv[0], cv[1], cv[2][:, :-1]], cc, row_reference=1, column_reference=1)
 
 
 def test_cli_stereo_with_cameras_and_a_column(capfd, tmp_path):

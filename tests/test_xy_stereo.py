@@ -414,3 +414,45 @@ def test_an_axis_warning_keeps_its_class_and_attributes():
     (said,) = [w.message for w in caught if isinstance(w.message, nfdepth.NoEdgePointsWarning)]
     assert str(said).startswith("no edge points: the images are textureless (") and str(said).count("no edge points") == 1
     assert said.rule == "zero crossing"
+
+
+def test_the_fusion_does_not_depend_on_the_unit_of_the_positions():
+    """The pyramid's column stated at twice its spacing: with positions in steps (0, 1, 2 and 0, 2, 4) the fusion
+    refuses what disagrees and warns (median scale 0.5); the same positions in hundredths (0, 100, 200 and 0, 200,
+    400) were fused in silence, since ``max_axis_disagreement_px`` and the warning's 0.25 px floor were compared
+    with disparities per unit of position (0.005-0.01 per hundredth, never 0.5 apart). Now both compare px at the
+    smallest neighbour spacing: the disparities and stds come out 100 times smaller, everything else the same."""
+    from nfdepth.synthetic import paper_camera, paper_pyramid, static_sequence
+
+    cam, poly = paper_camera(), paper_pyramid()
+    row = static_sequence(poly, cam, n_views=3, camera_step=(2.0, 0.0, 0.0), dtype=np.float32)
+    col = static_sequence(poly, cam, n_views=3, camera_step=(0.0, 2.0, 0.0), dtype=np.float32)
+    results, said = [], []
+    for unit in (1.0, 100.0):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            r = static_stereo_xy(row.frames, col.frames, row_reference=1, column_reference=1, row_positions=[0.0, unit, 2 * unit], column_positions=[0.0, 2 * unit, 4 * unit])
+        results.append(r)
+        said.append([str(w.message) for w in caught])
+    a, b = results
+    assert len(said[0]) == 1 and said[0][0].startswith("the column's disparities are a median 0.5 times the row's"), said[0]
+    assert said[1] == said[0]
+    assert a.conflict.sum() > 100
+    np.testing.assert_array_equal(b.conflict, a.conflict)
+    np.testing.assert_array_equal(b.reason, a.reason)
+    # float32 disparities per unit of position: 100 times smaller, to float32 rounding
+    np.testing.assert_allclose(100.0 * b.disparity, a.disparity, rtol=1e-5, equal_nan=True)
+    np.testing.assert_allclose(100.0 * b.uncertainty, a.uncertainty, rtol=1e-5, equal_nan=True)
+
+
+def test_fuse_axes_counts_the_disagreement_in_px_at_the_spacing():
+    """Disparities per unit of position 0.03 and 0.04 at a spacing of 100 units are 3 and 4 px: refused (1 px apart at
+    14 std); with the default spacing of 1 they were 0.01 px apart and kept."""
+    row = _result([[0.03]], [[0.0005]])
+    col = _result([[0.04]], [[0.0005]])
+    assert not fuse_axes(row, col)[4].any()
+    d, s, reason, _, conflict = fuse_axes(row, col, spacing=100.0)
+    assert conflict.tolist() == [[True]] and reason[0, 0] == Reason.UNCERTAIN and np.isnan(d[0, 0]) and np.isnan(s[0, 0])
+    for bad, exc in ((0.0, ValueError), (float("nan"), ValueError), ("1", TypeError)):
+        with pytest.raises(exc, match="^spacing must be a positive finite number"):
+            fuse_axes(row, col, spacing=bad)

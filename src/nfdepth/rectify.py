@@ -35,7 +35,9 @@ vertical misalignment of up to ``MAX_OFF_LINE d``).
 
 from __future__ import annotations
 
+import copy
 import math
+import re
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -46,7 +48,9 @@ import numpy as np
 
 from ._derotation import derotate, grid_rays, turn_rays
 from ._validate import (
+    as_image,
     as_vector3,
+    check_frame_size,
     check_image_size,
     check_positive_or_inf,
     check_view_index,
@@ -92,17 +96,18 @@ class CalibratedCamera:
     Parameters
     ----------
     matrix : array_like, (3, 3)
-        Intrinsic matrix ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]`` in pixels
-        (``fx, fy > 0``; pixel centres at integers).
+        Intrinsic matrix ``[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`` in pixels
+        (``fx, fy > 0``; pixel centres at integers; no skew: OpenCV's lens
+        model, which undoes the distortion, has none).
     width_px, height_px : int
         Image size.
     position : array_like, (3,)
         Optical centre in world coordinates, scene units.
     rotation : array_like, (3, 3)
         Camera-to-world rotation (a proper rotation matrix, to 1e-6).
-    distortion : array_like, optional
+    distortion : array_like or None, optional
         OpenCV's coefficients: 4, 5 or 8 of ``k1, k2, p1, p2, k3, k4, k5, k6``
-        (default none).
+        (default, empty or None: none).
     """
 
     matrix: np.ndarray
@@ -115,14 +120,20 @@ class CalibratedCamera:
     def __post_init__(self) -> None:
         k = _as_matrix("matrix", self.matrix, (3, 3))
         if not (k[0, 0] > 0 and k[1, 1] > 0) or k[1, 0] != 0 or np.any(k[2] != (0.0, 0.0, 1.0)):
-            msg = f"matrix must be an intrinsic matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0 px, got {k.tolist()}"
+            msg = f"matrix must be an intrinsic matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0 px, got {k.tolist()}"
+            raise ValueError(msg)
+        if k[0, 1] != 0:  # OpenCV's undistortPoints and initUndistortRectifyMap read fx, fy, cx, cy alone
+            msg = (
+                f"matrix has a skewed pixel grid (matrix[0, 1] = {k[0, 1]:g}): expected 0 (OpenCV's lens model, which undoes the "
+                "distortion and rectifies the views, has no skew term: every ray would be off)"
+            )
             raise ValueError(msg)
         check_image_size(self)
         r = _as_matrix("rotation", self.rotation, (3, 3))
         if not np.allclose(r.T @ r, np.eye(3), atol=1e-6) or not np.linalg.det(r) > 0:
             msg = f"rotation must be a rotation matrix (orthonormal, determinant +1), got {r.tolist()}"
             raise ValueError(msg)
-        dist = np.asarray(self.distortion, dtype=np.float64).ravel()
+        dist = np.zeros(0) if self.distortion is None else np.asarray(self.distortion, dtype=np.float64).ravel()  # None: none, as in OpenCV
         if dist.size not in _DISTORTION_SIZES or not np.all(np.isfinite(dist)):
             msg = f"distortion must be 4, 5 or 8 finite OpenCV coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) or none, got {dist.tolist()}"
             raise ValueError(msg)
@@ -142,12 +153,12 @@ class CalibratedCamera:
 
     @classmethod
     def from_opencv(cls, matrix, distortion, rvec_or_rotation, tvec, size) -> CalibratedCamera:
-        """From OpenCV's calibration: ``X_cam = R X_world + t`` (``R`` as a 3 x 3 matrix or a Rodrigues vector), ``size = (width, height)``."""
+        """From OpenCV's calibration: ``X_cam = R X_world + t`` (``R`` as a 3 x 3 matrix or a Rodrigues vector), ``size = (width, height)``; ``distortion`` None for none."""
         r = np.asarray(rvec_or_rotation, dtype=np.float64)
         r = cv2.Rodrigues(r.reshape(3, 1))[0] if r.size == 3 else _as_matrix("rotation", r, (3, 3))
         t = as_vector3("tvec", np.asarray(tvec, dtype=np.float64).ravel())
         w, h = size
-        return cls(matrix=matrix, width_px=w, height_px=h, position=-r.T @ t, rotation=r.T, distortion=np.asarray(distortion, dtype=np.float64).ravel())
+        return cls(matrix=matrix, width_px=w, height_px=h, position=-r.T @ t, rotation=r.T, distortion=distortion)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -279,6 +290,27 @@ def _camera_list(name: str, cameras) -> list:
     return list(cameras)
 
 
+def _as_views(name: str, views) -> list:
+    """``views`` as float32 grey images, each checked as static stereo checks its views (real, finite, 2-D), named by its given index.
+
+    Their sizes may differ (each is its own camera's). Checked before any
+    resampling: a cubic spline spreads one NaN pixel over a whole view, and
+    a complex view would lose its imaginary part with a mere ComplexWarning.
+    """
+    if isinstance(views, np.ndarray):
+        if views.ndim != 3:
+            msg = f"{name} must be a sequence of 2-D images or an array of shape (N, rows, cols), got shape {views.shape}"
+            raise ValueError(msg)
+    elif isinstance(views, (str, bytes)) or not isinstance(views, Iterable):
+        msg = f"{name} must be a sequence of 2-D arrays, one per camera, got {type(views).__name__}"
+        raise TypeError(msg)
+    out = []
+    for k, view in enumerate(views):
+        check_frame_size(f"{name}[{k}]", np.shape(view))
+        out.append(as_image(f"{name}[{k}]", view, np.float32))
+    return out
+
+
 def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
     """Resample a calibrated row of views to one camera and orientation, spaced along its X axis.
 
@@ -302,10 +334,16 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
 
     Raises
     ------
+    TypeError
+        ``views`` or ``cameras`` not a sequence, a view that is not real
+        numbers, a camera that is not a :class:`CalibratedCamera`, a
+        ``reference`` that is not an int.
     ValueError
-        A count, size or index that does not fit; two camera centres at the
-        same place; a row within :data:`MIN_SIDEWAYS_DEG` of the cameras'
-        mean optical axis (moving toward the scene: no row of views).
+        A view that is not a finite grey image, checked before any
+        resampling and named by its given index (``views[k]``); a count,
+        size or index that does not fit; two camera centres at the same
+        place; a row within :data:`MIN_SIDEWAYS_DEG` of the cameras' mean
+        optical axis (moving toward the scene: no row of views).
 
     Warns
     -----
@@ -314,7 +352,7 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         of the smallest neighbour spacing.
     """
     cameras = _camera_list("cameras", cameras)
-    views = list(views)
+    views = _as_views("views", views)
     n = len(views)
     if n < 2 or len(cameras) != n:
         msg = f"rectify_row needs at least 2 views and one camera per view, got {n} views and {len(cameras)} cameras"
@@ -379,7 +417,7 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         cam = cameras[k]
         same_camera = cam.shape == (h, w) and np.array_equal(cam.matrix, new_matrix) and not np.any(cam.distortion)
         if same_camera and np.allclose(cam.rotation, rect, rtol=0.0, atol=1e-12):
-            rect_views.append(np.array(views[k], dtype=np.float32))  # rectified as taken: no resampling
+            rect_views.append(views[k].copy())  # rectified as taken: no resampling
             inside.append(np.ones((h, w), bool))
             continue
         # OpenCV's R turns the camera's axes into the rectified ones: R_rect^T R_k
@@ -388,7 +426,7 @@ def rectify_row(views, cameras, *, reference: int) -> RectifiedRow:
         ahead = _ahead(cam, rect, new_matrix, (h, w))
         tol = 1e-3  # px: float32 maps of a pixel on the border
         seen = ahead & (map_x >= -tol) & (map_x <= cw - 1 + tol) & (map_y >= -tol) & (map_y <= ch - 1 + tol)
-        rect_views.append(derotate(np.asarray(views[k], np.float32), (np.clip(map_x, -1, cw), np.clip(map_y, -1, ch), seen)))
+        rect_views.append(derotate(views[k], (np.clip(map_x, -1, cw), np.clip(map_y, -1, ch), seen)))
         inside.append(seen)
     return RectifiedRow(
         views=rect_views,
@@ -422,12 +460,15 @@ class CalibratedRowDepth:
     its own pixels, scene units, NaN where unknown; ``edge_mask``: the
     rectified reference's edge points read back the same way;
     ``disparity``: the rectified reference's disparity behind ``depth``
-    (px per scene unit of position; NaN where ``depth`` has no value:
-    unknown, or seen by no other view); ``row``: the
+    (px per scene unit of position, in the rectified reference's pixels;
+    NaN where static stereo has no value or the match is seen by no other
+    view; not bounded by ``depth_range``: a disparity whose depth lies
+    beyond it stays, and ``depth`` and :meth:`filled` drop that depth,
+    the fill taking it as a measurement, not a hole); ``row``: the
     :class:`RectifiedRow`; ``result``: static stereo's
     :class:`nfdepth.stereo.StereoResult` on it (as ``disparity``, before
-    that last test); ``depth_range``: the ``(near, far)`` that bounds
-    ``depth`` and its fill, or None.
+    the test of the other views); ``depth_range``: the ``(near, far)`` that
+    bounds ``depth`` and its fill, or None.
     """
 
     depth: np.ndarray
@@ -484,6 +525,44 @@ def _depth_points(camera: CalibratedCamera, depth, image):
     return pts, point_colors(image, rows, cols, depth.shape)
 
 
+#: Where static stereo's words number the views (its warnings of views that move across the row, do not fit
+#: their positions or are the same image; ``views[k]`` of an error): "view 2", "views 0 and 2", "views 0, 1 and
+#: 3", "reference view 1", "views[2]".
+_VIEW_INDICES = re.compile(r"\b(views?\[|views? |reference view )(\d+(?:(?:, | and )\d+)*)(?![.\d])")
+#: The fitted positions of the views, listed in their order.
+_LISTED_IN_ORDER = re.compile(r"(at about )((?:[^,()]+, )*[^,()]+)(, in the order given)")
+
+
+def _given_indices(text: str, order) -> str:
+    """``text`` of static stereo on a rectified row (views numbered along it) with each view's given index (``order``).
+
+    A list of the views' fitted positions "in the order given" is put in
+    the order given too.
+    """
+    n = len(order)
+
+    def indices(m):
+        return m.group(1) + re.sub(r"\d+", lambda k: str(order[int(k.group())]) if int(k.group()) < n else k.group(), m.group(2))
+
+    def listed(m):
+        items = m.group(2).split(", ")
+        if len(items) != n:
+            return m.group()
+        return m.group(1) + ", ".join(items[order.index(k)] for k in range(n)) + m.group(3)
+
+    return _LISTED_IN_ORDER.sub(listed, _VIEW_INDICES.sub(indices, text))
+
+
+def _with_given_indices(message: Warning, order) -> Warning:
+    """The warning ``message`` with :func:`_given_indices` applied to its text: a copy of its class and attributes, or itself when its text names no view."""
+    text = _given_indices(str(message), order)
+    if text == str(message):
+        return message
+    out = copy.copy(message)
+    out.args = (text,)
+    return out
+
+
 def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **stereo_options) -> CalibratedRowDepth:
     """Depth in the reference camera's pixels from a calibrated, unrectified row of views.
 
@@ -530,18 +609,20 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         ``depth_range`` that is not two numbers.
         Also what static stereo refuses as such.
     ValueError
-        What :func:`rectify_row` refuses (a count, size or index that does
-        not fit, two camera centres at the same place, a row within
-        :data:`MIN_SIDEWAYS_DEG` of the cameras' mean optical axis); a
-        ``depth_range`` not ``0 < near < far`` or
-        whose ``near`` is too near for a finite disparity; what static
-        stereo refuses (with ``depth_range``, the message names it).
+        What :func:`rectify_row` refuses (a view that is not a finite grey
+        image, a count, size or index that does not fit, two camera centres
+        at the same place, a row within :data:`MIN_SIDEWAYS_DEG` of the
+        cameras' mean optical axis); a ``depth_range`` not ``0 < near <
+        far`` or whose ``near`` is too near for a finite disparity; what
+        static stereo refuses (with ``depth_range``, the message names it).
 
     Warns
     -----
     UserWarning
         A camera centre off the fitted line (:func:`rectify_row`); most
-        measured depths beyond ``depth_range``; static stereo's own warnings.
+        measured depths beyond ``depth_range``; static stereo's own warnings,
+        of their class, whose views are numbered as given (static stereo
+        runs on them sorted along the row).
     """
     from ._validate import check_depth_range
     from .stereo import (
@@ -565,13 +646,24 @@ def calibrated_row_depth(views, cameras, *, reference: int, depth_range=None, **
         with np.errstate(over="ignore", divide="ignore"):
             searched = _checked_depth_disparities("depth_range", depth_range, row.disparity_range(depth_range))
         stereo_options["disparity_range_px"] = searched
+    # static stereo numbers the views along the rectified row: its words are said again with the indices given
+    error = None
     try:
-        res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
-    except ValueError as exc:
-        if depth_range is None:
-            raise
-        msg = f"depth_range ({depth_range[0]:g}, {depth_range[1]:g}) (disparities {searched[0]:.4g}..{searched[1]:.4g} px per scene unit): {exc}; widen or move the depth range"
-        raise ValueError(msg) from None
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = static_stereo(row.views, reference=row.reference, positions=row.positions, axis=row.axis, **stereo_options)
+    except (TypeError, ValueError) as exc:
+        error = exc
+    for said in caught:
+        warnings.warn(_with_given_indices(said.message, row.order), stacklevel=2)  # (the warning itself, its class and attributes kept)
+    if error is not None:
+        text = _given_indices(str(error), row.order)
+        if isinstance(error, ValueError) and depth_range is not None:
+            msg = f"depth_range ({depth_range[0]:g}, {depth_range[1]:g}) (disparities {searched[0]:.4g}..{searched[1]:.4g} px per scene unit): {text}; widen or move the depth range"
+            raise ValueError(msg) from None
+        if text == str(error) or type(error) not in (TypeError, ValueError):
+            raise error
+        raise type(error)(text) from error
     d = np.asarray(res.disparity, dtype=np.float64)
     h, w = d.shape
     rows, cols = np.mgrid[0:h, 0:w]
@@ -769,9 +861,7 @@ def cameras_to_toml(cameras) -> str:
     TypeError
         An item that is not a :class:`CalibratedCamera`.
     ValueError
-        No camera (a file :func:`load_cameras` would refuse), or a camera
-        with a skewed pixel grid (``matrix[0, 1] != 0``), which the file
-        cannot hold.
+        No camera (a file :func:`load_cameras` would refuse).
     """
 
     def numbers(values) -> str:
@@ -782,10 +872,7 @@ def cameras_to_toml(cameras) -> str:
         if not isinstance(cam, CalibratedCamera):
             msg = f"cameras[{k}] must be a CalibratedCamera, got {type(cam).__name__}"
             raise TypeError(msg)
-        m = cam.matrix
-        if m[0, 1] != 0:
-            msg = f"cameras[{k}] has a skewed pixel grid (matrix[0, 1] = {m[0, 1]:g}), which a cameras file cannot hold: expected 0"
-            raise ValueError(msg)
+        m = cam.matrix  # (no skew: a CalibratedCamera refuses it)
         lines += ["[[camera]]", f"width_px = {cam.width_px}", f"height_px = {cam.height_px}"]
         lines += [f"{key} = {float(v)!r}" for key, v in (("fx_px", m[0, 0]), ("fy_px", m[1, 1]), ("cx_px", m[0, 2]), ("cy_px", m[1, 2]))]
         if cam.distortion.size:
@@ -800,6 +887,39 @@ def cameras_to_toml(cameras) -> str:
 
 
 # ----------------------------------------------------------------- two lines
+
+
+#: A row and a column of cameras whose lines run closer than this are refused. The column is there to measure the
+#: edges parallel to the row, which the row cannot (B = 0): a line at an angle a to the row measures them with the
+#: weight sin^2 a of a column at right angles, a quarter at 30 degrees; and at 0 the two are one line (the same
+#: cameras given twice, their measurements counted twice: a std sqrt(2) too small). The bound of MIN_SIDEWAYS_DEG.
+_MIN_LINES_DEG = 30.0
+
+
+def _line_direction(cameras) -> np.ndarray | None:
+    """The direction of the least-squares line through the cameras' centres, or None where there is none (fewer than two cameras, or all at one place; :func:`rectify_row` says why)."""
+    if len(cameras) < 2 or not all(isinstance(c, CalibratedCamera) for c in cameras):
+        return None
+    centres = np.stack([c.position for c in cameras])
+    dev = centres - centres.mean(axis=0)
+    if not np.max(np.abs(dev)) > 0:
+        return None
+    return np.linalg.svd(dev)[2][0]
+
+
+def _check_lines_apart(row_cameras, column_cameras) -> None:
+    """Refuse a row and a column whose lines of centres run within ``_MIN_LINES_DEG`` of each other."""
+    row, column = _line_direction(row_cameras), _line_direction(column_cameras)
+    if row is None or column is None:
+        return
+    angle = math.degrees(math.acos(min(1.0, abs(float(row @ column)))))
+    if angle < _MIN_LINES_DEG:
+        msg = (
+            f"the row's cameras (row_cameras / --cameras, along {(np.round(row, 3) + 0.0).tolist()}) and the column's (column_cameras / "
+            f"--column-cameras, along {(np.round(column, 3) + 0.0).tolist()}) lie on lines {angle:.1f} degrees apart: expected at least "
+            f"{_MIN_LINES_DEG:g} (a column across the row; the same line given twice would count each measurement twice)"
+        )
+        raise ValueError(msg)
 
 
 @dataclass(frozen=True)
@@ -894,13 +1014,19 @@ def calibrated_grid_depth(
     Raises
     ------
     TypeError
-        A camera list that is not a sequence, a reference index that is not
-        an int, a ``max_line_disagreement_px`` that is not a number; what
-        :func:`calibrated_row_depth` refuses as such.
+        A camera or view list that is not a sequence, a view that is not
+        real (``row_views[k]``, ``column_views[k]``), a reference index
+        that is not an int, a ``max_line_disagreement_px`` that is not a
+        number; what :func:`calibrated_row_depth` refuses as such (the
+        message starts with "row: " or "column: ").
     ValueError
-        The two lines' reference cameras or images differ. Also a reference
-        index out of range, a ``max_line_disagreement_px`` that is not > 0,
-        and what :func:`calibrated_row_depth` refuses on either line.
+        The two lines' reference cameras or images differ, or their lines
+        of camera centres run within 30 degrees of each other (the same
+        line given twice; the column is there to measure the edges
+        parallel to the row). Also a view that is not a finite grey image,
+        a reference index out of range, a ``max_line_disagreement_px`` that
+        is not > 0, and what :func:`calibrated_row_depth` refuses on either
+        line (the message starts with "row: " or "column: ").
 
     Warns
     -----
@@ -914,16 +1040,26 @@ def calibrated_grid_depth(
 
     limit = check_positive_or_inf("max_line_disagreement_px", max_line_disagreement_px)
     row_cameras, column_cameras = _camera_list("row_cameras", row_cameras), _camera_list("column_cameras", column_cameras)
+    row_views, column_views = _as_views("row_views", row_views), _as_views("column_views", column_views)
     row_reference = check_view_index("row_reference", row_reference, len(row_cameras))
     column_reference = check_view_index("column_reference", column_reference, len(column_cameras))
     if row_cameras[row_reference] != column_cameras[column_reference]:
         msg = "the row's and the column's reference cameras must be the same camera: both lines pass through it"
         raise ValueError(msg)
-    if not np.array_equal(np.asarray(row_views[row_reference]), np.asarray(column_views[column_reference])):
+    counted = row_reference < len(row_views) and column_reference < len(column_views)  # (else a line says its count does not fit)
+    if counted and not np.array_equal(row_views[row_reference], column_views[column_reference]):
         msg = "the row's and the column's reference views must be the same image: both lines pass through the reference camera"
         raise ValueError(msg)
-    a = calibrated_row_depth(row_views, row_cameras, reference=row_reference, depth_range=depth_range, **stereo_options)
-    b = calibrated_row_depth(column_views, column_cameras, reference=column_reference, depth_range=depth_range, **stereo_options)
+    _check_lines_apart(row_cameras, column_cameras)
+    lines = {}
+    for which, views, cameras, reference in (("row", row_views, row_cameras, row_reference), ("column", column_views, column_cameras, column_reference)):
+        try:
+            lines[which] = calibrated_row_depth(views, cameras, reference=reference, depth_range=depth_range, **stereo_options)
+        except (TypeError, ValueError) as exc:
+            if type(exc) not in (TypeError, ValueError):
+                raise
+            raise type(exc)(f"{which}: {exc}") from exc  # (its views[k] and cameras[k] are that line's)
+    a, b = lines["row"], lines["column"]
     # each line's inverse depth as a disparity in px at the nearest neighbour spacing of either line
     # (f rho b: the unit of max_line_disagreement_px), fused as two rectified axes are
     scale = a.row.focal_px * min(float(np.min(np.diff(r.row.positions))) for r in (a, b))

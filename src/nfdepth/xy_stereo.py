@@ -27,9 +27,11 @@ the variance scaled by the reduced chi^2 of the two when they disagree more
 than their errors allow (as :func:`nfdepth.static_stereo` does with its own
 residuals). A pixel measured along one axis only keeps that axis's value and
 standard deviation. Where the two disagree both beyond
-``max_axis_disagreement_px`` and beyond three standard deviations of their
-difference (typically a depth step, which the row and the column see
-occluded on different sides), the pixel is ``Reason.UNCERTAIN``.
+``max_axis_disagreement_px`` (px of disparity at the smallest spacing of
+neighbouring views of either line, so whatever the positions' unit) and
+beyond three standard deviations of their difference (typically a depth
+step, which the row and the column see occluded on different sides), the
+pixel is ``Reason.UNCERTAIN``.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_frames, check_positive_or_inf, check_view_index
+from ._validate import as_frames, check_positive_or_inf, check_view_index, check_within
 from .depth import Reason
 from .stereo import StereoResult, static_stereo
 
@@ -81,6 +83,11 @@ class XYStereoResult(StereoResult):
     conflict: np.ndarray | None = None
 
 
+def _smallest_step(positions) -> float:
+    """The smallest spacing of neighbouring views of one line (``positions`` as static stereo took them; None: step 1)."""
+    return 1.0 if positions is None else float(np.min(np.diff(np.asarray(positions, dtype=np.float64))))
+
+
 def _union_range(a, b):
     """The smallest range holding the search ranges ``a`` and ``b`` (None where an axis has none)."""
     if a is None or b is None:
@@ -108,16 +115,20 @@ _AXES_CONFLICT_SHARE = 0.5
 _AXES_MIN_BOTH = 100
 
 
-def _warn_if_axes_disagree(row, column, both: np.ndarray, conflict: np.ndarray, *, positions: str = "row_positions / column_positions, --positions / --column-positions") -> None:
+def _warn_if_axes_disagree(
+    row, column, both: np.ndarray, conflict: np.ndarray, *, spacing: float = 1.0, positions: str = "row_positions / column_positions, --positions / --column-positions"
+) -> None:
     """Warn when the column's disparities are a median scale apart from the row's, or mostly refused (positions in two units?).
 
     ``both``: the pixels fused from both lines; ``conflict``: those both
-    lines measured but that were refused for disagreeing.
+    lines measured but that were refused for disagreeing; ``spacing``: as
+    for :func:`fuse_axes` (the row's disparities times it are px: a
+    disparity below 0.25 px gives no ratio to trust).
     """
     measured = both | conflict
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = column.disparity[measured] / row.disparity[measured]
-    ratio = ratio[np.isfinite(ratio) & (np.abs(row.disparity[measured]) >= 0.25)]
+    ratio = ratio[np.isfinite(ratio) & (np.abs(row.disparity[measured]) * spacing >= 0.25)]
     if ratio.size < _AXES_MIN_BOTH:
         return
     scale = float(np.median(ratio))
@@ -134,19 +145,23 @@ def _warn_if_axes_disagree(row, column, both: np.ndarray, conflict: np.ndarray, 
     )
 
 
-def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_px: float = 0.5):
+def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_px: float = 0.5, spacing: float = 1.0):
     """Fuse two disparity maps of one reference view (module docstring).
 
     ``row``, ``column``: :class:`~nfdepth.stereo.StereoResult` or anything
     with ``disparity``, ``uncertainty`` and ``reason`` maps in one unit
     (:func:`nfdepth.rectify.calibrated_grid_depth` passes two calibrated
-    lines' inverse depths so).
+    lines' inverse depths so). ``spacing``: the neighbour spacing, in the
+    unit of position, at which ``max_axis_disagreement_px`` is counted (the
+    maps times ``spacing`` are px; 1 for maps in px already); the result
+    does not depend on the positions' unit.
 
     Returns ``(disparity, uncertainty, reason, axis_count, conflict)``:
     float32 maps with NaN where no value, uint8 reasons, the number of axes
     with a value, and the pixels refused for disagreeing.
     """
     limit = check_positive_or_inf("max_axis_disagreement_px", max_axis_disagreement_px)
+    spacing = check_within("spacing", spacing, advice="the smallest spacing of neighbouring views, in the unit of position")
     for name, part in (("row", row), ("column", column)):
         if not all(hasattr(part, a) for a in ("disparity", "uncertainty", "reason")):
             msg = f"{name} must be a StereoResult (or have disparity, uncertainty and reason maps), got {type(part).__name__}"
@@ -159,8 +174,9 @@ def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_
     both = ok_x & ok_y
     dx = np.where(ok_x, row.disparity, 0.0).astype(np.float64)
     dy = np.where(ok_y, column.disparity, 0.0).astype(np.float64)
-    vx = np.maximum(np.where(ok_x, row.uncertainty, 1.0).astype(np.float64) ** 2, _MIN_VARIANCE)
-    vy = np.maximum(np.where(ok_y, column.uncertainty, 1.0).astype(np.float64) ** 2, _MIN_VARIANCE)
+    floor = _MIN_VARIANCE / spacing**2  # _MIN_VARIANCE px^2 in the maps' unit
+    vx = np.maximum(np.where(ok_x, row.uncertainty, 1.0).astype(np.float64) ** 2, floor)
+    vy = np.maximum(np.where(ok_y, column.uncertainty, 1.0).astype(np.float64) ** 2, floor)
     wx, wy = 1.0 / vx, 1.0 / vy
     diff = dx - dy
     chi2 = diff**2 / (vx + vy)
@@ -168,7 +184,7 @@ def fuse_axes(row: StereoResult, column: StereoResult, *, max_axis_disagreement_
     fused_var = np.maximum(chi2, 1.0) / (wx + wy)
     disparity = np.where(both, fused, np.where(ok_x, dx, dy))
     variance = np.where(both, fused_var, np.where(ok_x, vx, vy))
-    conflict = both & (np.abs(diff) > limit) & (chi2 > 9.0)
+    conflict = both & (np.abs(diff) * spacing > limit) & (chi2 > 9.0)
     reason = np.where(ok_x | ok_y, np.uint8(Reason.OK), _merged_reason(row.reason, column.reason)).astype(np.uint8)
     reason[conflict] = Reason.UNCERTAIN
     bad = reason != Reason.OK
@@ -210,8 +226,11 @@ def static_stereo_xy(
         position, so give both when the spacings differ.
     max_axis_disagreement_px : float
         A pixel measured on both axes whose two disparities differ by more
-        than this and by more than three standard deviations of their
-        difference is ``UNCERTAIN`` (``inf``: never).
+        than this many px at the smallest spacing of neighbouring views of
+        either line (the disparities per unit of position times that
+        spacing: the same refusals whatever the positions' unit) and by more
+        than three standard deviations of their difference is ``UNCERTAIN``
+        (``inf``: never).
     **options
         Any other keyword argument of :func:`nfdepth.static_stereo`
         (``edges_only``, ``sigma_px``, ``levels``, ``noise_std``, ``threads``,
@@ -270,9 +289,11 @@ def static_stereo_xy(
     for message in said:
         warnings.warn(message, stacklevel=2)  # (the warning itself: a NoEdgePointsWarning keeps its rule and reason)
     row, column = results["x"], results["y"]
-    disparity, std, reason, count, conflict = fuse_axes(row, column, max_axis_disagreement_px=limit)
+    # the disparities are per unit of position: in px at the smallest neighbour spacing of either line, whatever the unit
+    spacing = min(_smallest_step(row_positions), _smallest_step(column_positions))
+    disparity, std, reason, count, conflict = fuse_axes(row, column, max_axis_disagreement_px=limit, spacing=spacing)
     if not said:  # an axis's own warning says what is wrong with it
-        _warn_if_axes_disagree(row, column, count == 2, conflict)
+        _warn_if_axes_disagree(row, column, count == 2, conflict, spacing=spacing)
     edge_mask = row.edge_mask | column.edge_mask
     return XYStereoResult(
         disparity=disparity,
