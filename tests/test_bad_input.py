@@ -710,7 +710,7 @@ def _cli_cases(tmp: Path, v):
         ("output extension", ["stereo", v0, v1, v2, "--out", str(tmp / "o.png")], 2, "must end in one of .pfm, .tif, .tiff, .npy"),
         ("output folder missing", ["stereo", v0, v1, v2, "--out", str(tmp / "nodir" / "o.pfm")], 4, "directory '" + str(tmp / "nodir") + "' does not exist"),
         ("output folder is a file", ["stereo", v0, v1, v2, "--out", str(tmp / "afile" / "o.pfm")], 4, "o.pfm': '" + str(tmp / "afile") + "' is not a directory"),
-        ("demo out inside a file", ["demo", "--out", str(tmp / "afile" / "sub")], 4, f"cannot write '{tmp / 'afile' / 'sub'}': Not a directory"),
+        ("demo out inside a file", ["demo", "--out", str(tmp / "afile" / "sub")], 4, f"--out '{tmp / 'afile' / 'sub'}': '{tmp / 'afile'}' is not a directory"),
         ("empty --out", ["demo", "--out", ""], 2, "--out is empty (''); expected a value (an unset shell variable?)"),
         ("empty --json=", ["reproduce", "--json=", "--only", "exp1"], 2, "--json is empty ('--json='); expected a value"),
         ("empty positional", ["view", ""], 2, "argument 2 is empty ('')"),

@@ -143,6 +143,64 @@ def test_reproduce_sigma_and_max_rel_std_reach_the_experiments(tmp_path, capsys)
     assert loose > run_paper_experiment("exp2", noise_std=1.0).summary()["points"]
 
 
+def _strict_json(text):
+    """``json.loads`` refusing the tokens ``NaN``, ``Infinity``, ``-Infinity`` (not JSON; Python's encoder writes them by default)."""
+
+    def refuse(token):
+        raise ValueError(f"not JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_reproduce_json_without_points_is_json(tmp_path, capsys):
+    """An experiment that keeps no point has no error statistics: null in the JSON, not the bare NaN no JSON reader takes."""
+    js = tmp_path / "r.json"
+    code, _, err = run_cli(capsys, "reproduce", "--only", "exp1", "--noise", "1", "--max-rel-std", "0.005", "--no-compare", "--json", js)
+    assert code == 0, err
+    entry = _strict_json(js.read_text())["exp1"]
+    assert entry["points"] == 0 and entry["edge_points"] > 0  # (to_jsonable drops an "edge_points" key: kept here)
+    for key in ("flow_rel_error", "depth_rel_error"):
+        assert entry[key] == {"max": None, "p95": None, "median": None, "count": 0}
+    assert entry["median_error_over_std"] is None
+    assert entry["settings"]["max_rel_std"] == 0.005
+
+
+@pytest.mark.parametrize(
+    ("argv", "code", "line"),
+    [
+        (["--json", "{tmp}/same.json", "--out", "{tmp}/same.json"], 2,
+         "--json and --out name the same path '{tmp}/same.json'; expected a different path for each output (--json a file, --out a folder)"),
+        (["--json", "{tmp}/r.json", "--out", "{tmp}/./r.json"], 2, "--json and --out name the same path '{tmp}/r.json'"),
+        (["--json", "{tmp}/r.json", "--out", "{tmp}/r.json/figs"], 2,
+         "--out '{tmp}/r.json/figs' lies inside --json '{tmp}/r.json' (a file); expected a different path for each output, the folder outside the JSON file"),
+        (["--out", "{tmp}/afile/figs"], 4, "--out '{tmp}/afile/figs': '{tmp}/afile' is not a directory"),
+        (["--out", "{tmp}/afile/figs/deeper"], 4, "--out '{tmp}/afile/figs/deeper': '{tmp}/afile' is not a directory"),
+        (["--out", "{tmp}/afile"], 4, "--out '{tmp}/afile' exists and is not a directory; expected a folder for the output files"),
+    ],
+)
+def test_reproduce_refuses_its_output_paths_before_any_work(tmp_path, capsys, argv, code, line):
+    """Output paths that could only fail once every experiment has run (then exit 4) are refused first."""
+    (tmp_path / "afile").write_text("x")
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    got, out, err = run_cli(capsys, "reproduce", "--only", "exp1", "--no-compare", *argv)
+    assert (got, out) == (code, ""), err
+    assert err.startswith(f"nfdepth: error: {line.format(tmp=tmp_path)}") and len(err.splitlines()) == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "symlink"), reason="symbolic links")
+def test_reproduce_out_a_link_to_a_missing_folder(tmp_path, capsys):
+    import os
+
+    link = tmp_path / "link"
+    os.symlink(tmp_path / "missing", link)
+    code, out, err = run_cli(capsys, "reproduce", "--only", "exp1", "--no-compare", "--out", link)
+    assert (code, out) == (4, "")
+    assert err == f"nfdepth: error: --out '{link}' exists and is not a directory (a link to a missing folder); expected a folder for the output files\n"
+    code, out, err = run_cli(capsys, "reproduce", "--only", "exp1", "--no-compare", "--out", link / "figs")
+    assert (code, out) == (4, "") and err == f"nfdepth: error: --out '{link / 'figs'}': directory '{link}' does not exist\n"
+
+
 @pytest.mark.parametrize(
     ("argv", "line"),
     [
@@ -180,6 +238,31 @@ def test_bench_passes_its_options_through(tmp_path, capsys, monkeypatch):
     assert len(calls) == 2
 
 
+def test_bench_says_why_the_art_views_are_missing(tmp_path, monkeypatch):
+    """NFDEPTH_DATA set to a missing folder is told as such (it said "set NFDEPTH_DATA"); a data folder without Art, named."""
+    from nfdepth import bench
+
+    monkeypatch.setenv("NFDEPTH_DATA", str(tmp_path / "absent"))
+    with pytest.warns(UserWarning) as caught:
+        records = bench.run_benchmarks(sizes=[(60, 80)], repeats=1, scenes=("middlebury-art",))
+    assert len(caught) == 1
+    assert f"NFDEPTH_DATA={str(tmp_path / 'absent')!r} is not a directory" in str(caught[0].message)
+    assert f"NFDEPTH_DATA={str(tmp_path / 'absent')!r} is not a directory" in records[0]["skipped"]
+    (tmp_path / "data").mkdir()
+    monkeypatch.setenv("NFDEPTH_DATA", str(tmp_path / "data"))
+    with pytest.warns(UserWarning) as caught:
+        records = bench.run_benchmarks(sizes=[(60, 80)], repeats=1, scenes=("middlebury-art",))
+    art = tmp_path / "data" / "middlebury2005" / "Art"
+    assert records[0]["skipped"].startswith(f"skipped: the Middlebury 2005 Art views were not found in '{art}' (set NFDEPTH_DATA")
+    # views there that cannot be decoded: said so, not "not found"
+    art.mkdir(parents=True)
+    for i in range(7):
+        (art / f"view{i}.png").write_bytes(b"not a PNG")
+    with pytest.warns(UserWarning) as caught:
+        records = bench.run_benchmarks(sizes=[(60, 80)], repeats=1, scenes=("middlebury-art",))
+    assert records[0]["skipped"] == f"skipped: the Middlebury 2005 Art views in '{art}' could not be read as images (are the files intact?)"
+
+
 # ------------------------------------------------------------ evaluate: refused before any work
 
 
@@ -189,7 +272,12 @@ def test_bench_passes_its_options_through(tmp_path, capsys, monkeypatch):
         (["--json", "{tmp}/r.txt"], 2, "--json '{tmp}/r.txt' must end in one of .json"),
         (["--json", "{tmp}/adir.json"], 4, "--json '{tmp}/adir.json' is a directory; expected a file path"),
         (["--json", "{tmp}/nodir/r.json"], 4, "--json '{tmp}/nodir/r.json': directory '{tmp}/nodir' does not exist"),
-        (["--maps", "{tmp}/afile"], 4, "--maps '{tmp}/afile' exists and is not a directory"),
+        (["--maps", "{tmp}/afile"], 4, "--maps '{tmp}/afile' exists and is not a directory; expected a folder for the output files"),
+        (["--maps", "{tmp}/afile/maps"], 4, "--maps '{tmp}/afile/maps': '{tmp}/afile' is not a directory"),
+        (["--json", "{tmp}/x.json", "--maps", "{tmp}/x.json"], 2,
+         "--json and --maps name the same path '{tmp}/x.json'; expected a different path for each output (--json a file, --maps a folder)"),
+        (["--methods", "sgbm", "bm", "--cost-step-px", "1e9"], 2,
+         "--cost-step-px spaces nfdepth's cost volume: add nfdepth to --methods (now sgbm bm), or leave --cost-step-px out"),
         (["--downsample", "0"], 2, "--downsample must be a positive integer, got 0"),
         (["--views", "two"], 2, "--views must be 'three' or 'all', got 'two'"),
         (["--cost-step-px", "0"], 2, "--cost-step-px must be a positive number, got 0"),

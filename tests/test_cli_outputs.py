@@ -58,7 +58,7 @@ def _input_clash_cases(w: Path) -> dict:
         ("stereo --column", ["stereo", *v, "--column", str(w / "pyramid_column0.png"), v[1], "--out", out, "--preview", str(w / "pyramid_column0.png")], "--preview", "pyramid_column0.png"),
         ("stereo through a symbolic link", ["stereo", *v, "--out", out, "--preview", str(w / "link.png")], "--preview", v[1]),
         ("stereo relative path", ["stereo", *v, "--out", out, "--preview", os.path.join(str(w), "..", w.name, "pyramid_view1.png")], "--preview", v[1]),
-        ("view default output", ["view", v[0]], "--out", v[0]),
+        ("view default output", ["view", v[0]], "the default output", v[0]),  # no --out given: not told as one
         ("view --colorbar", ["view", v[0], "--colorbar", "--out", v[0]], "--out", v[0]),
         ("dynamic --preview", ["dynamic", *dyn, "--rig", RIG, "--out", out, "--preview", dyn[2]], "--preview", dyn[2]),
         ("dynamic --figure", ["dynamic", *dyn, "--rig", RIG, "--out", out, "--figure", dyn[0]], "--figure", dyn[0]),
@@ -98,7 +98,11 @@ def test_an_output_is_never_an_input_even_with_force(work, capfd, name):
     assert code == 2, (name, err)
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err, err
-    assert lines[0].startswith(f"nfdepth: error: {option} '") and "is the input '" in lines[0], lines[0]
+    assert lines[0].startswith(f"nfdepth: error: {option} '"), lines[0]
+    if option.startswith("--"):
+        assert "is the input '" in lines[0], lines[0]
+    else:  # the path derived from the input's name
+        assert lines[0] == f"nfdepth: error: the default output '{victim}' (the input's name with .png) is the input itself; give --out (--force never overwrites an input)"
     assert Path(victim).name in lines[0] and "--force never overwrites an input" in lines[0]
     # nothing written, nothing changed
     assert sorted(work.parent.rglob("*")) == listing
@@ -110,6 +114,69 @@ def test_an_output_next_to_the_inputs_is_fine(work, capfd):
     code, _, err = run_cli(capfd, "stereo", *_views(work), "--out", out, "--preview", work / "p.png")
     assert code == 0, err
     assert out.is_file() and (work / "p.png").is_file()
+
+
+# ------------------------------------------------ the folders a failed run made
+
+
+def test_reproduce_failing_removes_the_folders_it_made(tmp_path, capfd, monkeypatch):
+    """A write failing on the 3rd figure (a full disk) removes the figures and the folders ``--out`` made: ``new`` and ``new/figs``."""
+    import errno
+
+    from nfdepth import plot
+
+    real, calls = plot.save_figure, []
+
+    def failing(fig, path, **kwargs):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(fig, path, **kwargs)
+
+    monkeypatch.setattr(plot, "save_figure", failing)
+    out = tmp_path / "new" / "figs"
+    code, _, err = run_cli(capfd, "reproduce", "--only", "exp1", "--no-compare", "--out", out)
+    assert code == 4 and len(calls) == 3
+    assert err == (
+        f"nfdepth: error: cannot write '{calls[2]}': No space left on device; removed the 2 output(s) it had completed"
+        f" and the folders it made ({tmp_path / 'new'}, {out})\n"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("interruption", "code", "line"), [("KeyboardInterrupt", 130, "interrupted"), ("_Terminated", 143, "terminated (SIGTERM)")])
+def test_demo_interrupted_removes_the_folders_it_made(tmp_path, capfd, monkeypatch, interruption, code, line):
+    """Ctrl-C or SIGTERM at the demo's last file (its point cloud): no file and no folder of it is left, ``example/rail`` included."""
+    from nfdepth import cli, io
+
+    exc = KeyboardInterrupt if interruption == "KeyboardInterrupt" else cli._Terminated
+
+    def interrupted(*args, **kwargs):
+        raise exc()
+
+    monkeypatch.setattr(io, "write_ply", interrupted)
+    out = tmp_path / "new" / "demo"
+    got, _, err = run_cli(capfd, "demo", "--out", out)
+    assert got == code
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"nfdepth: {line}; no partial output written; removed the "), err
+    made = ", ".join(str(p) for p in (tmp_path / "new", out, out / "example", out / "example" / "rail"))
+    assert lines[0].endswith(f" output(s) it had completed and the folders it made ({made})"), err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_into_an_existing_folder_keeps_it(tmp_path, capfd, monkeypatch):
+    """A folder the run did not make stays (with what was in it before); only the run's own files and folders go."""
+    from nfdepth import io
+
+    def failing(*args, **kwargs):
+        raise OSError(28, "No space left on device", "points.ply")
+
+    monkeypatch.setattr(io, "write_ply", failing)
+    (tmp_path / "old.txt").write_text("mine")
+    code, _, err = run_cli(capfd, "demo", "--out", tmp_path)
+    assert code == 4 and err.strip().endswith(f"and the folders it made ({tmp_path / 'example'}, {tmp_path / 'example' / 'rail'})"), err
+    assert [p.name for p in tmp_path.iterdir()] == ["old.txt"]
 
 
 # ---------------------------------------------------------------- PLY colours

@@ -113,14 +113,22 @@ def _cmd_evaluate(args, CLIError) -> int:
         raise CLIError(f"--views must be 'three' or 'all', got {args.views!r}", EXIT_USAGE)
     if args.downsample < 1:
         raise CLIError(f"--downsample must be a positive integer, got {args.downsample}", EXIT_USAGE)
-    from .cli import _as_option, _check_output, _positive
+    from .cli import (
+        _as_option,
+        _check_json_apart,
+        _check_out_dir,
+        _check_output,
+        _positive,
+    )
 
+    if args.cost_step_px is not None and "nfdepth" not in args.methods:  # the peers have no cost volume: it would be reported, not applied
+        raise CLIError(f"--cost-step-px spaces nfdepth's cost volume: add nfdepth to --methods (now {' '.join(args.methods)}), or leave --cost-step-px out", EXIT_USAGE)
     cost_step = _positive("--cost-step-px", args.cost_step_px)
     stereo_options = {} if cost_step is None else {"cost_step_px": cost_step}
+    if args.json and args.maps:
+        _check_json_apart(args.json, args.maps, "--maps")
     js = _check_output(args.json, force=True, exts=(".json",), what="--json") if args.json else None
-    maps = Path(args.maps) if args.maps else None
-    if maps is not None and maps.exists() and not maps.is_dir():
-        raise CLIError(f"--maps '{maps}' exists and is not a directory", EXIT_WRITE)
+    maps = _check_out_dir(args.maps, "--maps") if args.maps else None
     select_views(3, 1, views)
     if args.data is not None and not Path(args.data).expanduser().is_dir():
         raise CLIError(f"--data '{args.data}' is not a directory; expected the data folder (as filled by `nfdepth fetch-data --dest DIR`)", EXIT_DATA)

@@ -67,14 +67,18 @@ SIGMA_PX = 2.0
 _ART_HINT = "set NFDEPTH_DATA to the data folder, or download it with `nfdepth fetch-data --set middlebury2005`"
 
 
-def _data_root() -> Path | None:
-    """The Art folder under the data root that ``nfdepth evaluate`` finds (:func:`nfdepth.datasets.data_root`), or None."""
+def _art_views() -> list[Path] | str:
+    """The Art views 0..6 under the data root that ``nfdepth evaluate`` finds (:func:`nfdepth.datasets.data_root`), or why there are none."""
     from .datasets import DataNotFoundError, data_root
 
     try:
-        return data_root() / "middlebury2005" / "Art"
-    except DataNotFoundError:
-        return None
+        root = data_root() / "middlebury2005" / "Art"
+    except DataNotFoundError as exc:  # its own reason: NFDEPTH_DATA set to a missing folder is not NFDEPTH_DATA unset
+        return f"the Middlebury 2005 Art views were not found ({_ART_HINT}; {exc})"
+    paths = [root / f"view{i}.png" for i in range(7)]
+    if not all(p.is_file() for p in paths):
+        return f"the Middlebury 2005 Art views were not found in '{root}' ({_ART_HINT})"
+    return paths
 
 
 # ------------------------------------------------------------------ scenes
@@ -100,12 +104,9 @@ def _rendered(shape, n=3, shift=0.8, seed=0):
 
 
 def _middlebury(shape):
-    """Art views 0..6 scaled to cover ``shape`` and centre-cropped (grey float32), or None."""
-    root = _data_root()
-    if root is None:
-        return None
-    paths = [root / f"view{i}.png" for i in range(7)]
-    if not all(p.is_file() for p in paths):
+    """Art views 2..4 scaled to cover ``shape`` and centre-cropped (grey float32), or None (:func:`_art_problem` says why)."""
+    paths = _art_views()
+    if isinstance(paths, str):
         return None
     H, W = shape
     out = []
@@ -119,6 +120,14 @@ def _middlebury(shape):
         r0, c0 = (img.shape[0] - H) // 2, (img.shape[1] - W) // 2
         out.append(np.ascontiguousarray(img[r0 : r0 + H, c0 : c0 + W]).astype(np.float32))
     return out
+
+
+def _art_problem() -> str:
+    """Why :func:`_middlebury` gave no views: not found (where, or the data root's own error), or not readable."""
+    paths = _art_views()
+    if isinstance(paths, str):
+        return paths
+    return f"the Middlebury 2005 Art views in '{paths[0].parent}' could not be read as images (are the files intact?)"
 
 
 # ------------------------------------------------------------------- cases
@@ -293,7 +302,7 @@ def run_benchmarks(
             for scene in scenes:
                 frames = _rendered((H, W)) if scene == "rendered" else _middlebury((H, W))
                 if frames is None:  # said in the records (and the table), and once as a warning
-                    why = f"skipped: the Middlebury 2005 Art views were not found ({_ART_HINT})"
+                    why = f"skipped: {_art_problem()}"
                     records.append({"name": "all cases", "scene": scene, "height": H, "width": W, "megapixels": round(H * W / 1e6, 3), "threads": int(threads), "median_ms": None, "skipped": why})
                     if scene not in missing:
                         missing.add(scene)

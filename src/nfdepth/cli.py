@@ -120,11 +120,29 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 
 def _check_out_dir(path: str, what: str = "--out") -> Path:
-    """An output folder: it may exist as a folder or not exist; never a file."""
+    """An output folder: it may exist as a folder or not exist (it is made, its missing parents too); never a file, nor inside one."""
+    from .io import parent_folder_problem
+
     out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise CLIError(f"{what} '{out}' exists and is not a directory; expected a folder for the output files", EXIT_WRITE)
+    if os.path.lexists(out) and not out.is_dir():
+        link = " (a link to a missing folder)" if not out.exists() else ""
+        raise CLIError(f"{what} '{out}' exists and is not a directory{link}; expected a folder for the output files", EXIT_WRITE)
+    first = out  # the first folder the run makes: its parent must be a folder (not a file, found only once the work is done)
+    while not os.path.lexists(first.parent) and first.parent != first:
+        first = first.parent
+    problem = None if out.is_dir() else parent_folder_problem(first)
+    if problem:
+        raise CLIError(f"{what} '{out}': {problem}", EXIT_WRITE)
     return out
+
+
+def _check_json_apart(js: str, folder: str, what: str = "--out") -> None:
+    """Refuse a ``--json`` file that is the output folder ``what`` or would hold it: the run would fail only at its end."""
+    file, out = Path(js).resolve(), Path(folder).resolve()
+    if file == out:
+        raise CLIError(f"--json and {what} name the same path '{js}'; expected a different path for each output (--json a file, {what} a folder)", EXIT_USAGE)
+    if file in out.parents:
+        raise CLIError(f"{what} '{folder}' lies inside --json '{js}' (a file); expected a different path for each output, the folder outside the JSON file", EXIT_USAGE)
 
 
 #: A negative number as an option's value: argparse's own pattern knows only "-2" and
@@ -234,6 +252,21 @@ def _write_paper_figures(out_dir: Path, res) -> list[Path]:
     return written
 
 
+def _jsonable(obj):
+    """``obj`` as JSON takes it: NaN and inf (statistics of no point) as null, every key kept.
+
+    The numbers go through :func:`nfdepth.evaluate.to_jsonable`; its dicts drop
+    the bulky keys of an evaluation ("edge_points" among them), here a count.
+    """
+    from .evaluate import to_jsonable
+
+    if isinstance(obj, dict):
+        return {key: _jsonable(value) for key, value in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(value) for value in obj]
+    return to_jsonable(obj)
+
+
 def _cmd_reproduce(args) -> int:
     from .experiments import DEFAULT_SIGMA_PX, EXPERIMENTS, run_paper_experiment
 
@@ -241,6 +274,8 @@ def _cmd_reproduce(args) -> int:
         raise CLIError(f"--seed must be an integer >= 0 (the noise generator's seed), got {args.seed}")
     if args.noise < 0 or not np.isfinite(args.noise):
         raise CLIError(f"--noise must be a finite number >= 0, got {args.noise}")
+    if args.json and args.out:
+        _check_json_apart(args.json, args.out)
     if args.json:
         _check_output(args.json, force=True, exts=(".json",), what="--json")
     if args.out:
@@ -271,10 +306,10 @@ def _cmd_reproduce(args) -> int:
             entry["settings"] = {"nfdepth_version": __version__, **common, "sigma_px": sigma, "stencil": args.stencil}
             if literal is not None:
                 entry["literal_stencil"] = literal[n].summary()
-            payload[n] = entry
+            payload[n] = _jsonable(entry)
         from .io import atomic_write
 
-        text = json.dumps(payload, indent=2)
+        text = json.dumps(payload, indent=2, allow_nan=False)
         atomic_write(Path(args.json), lambda fh: fh.write(text.encode()), force=True)
         print(f"wrote {args.json}")
     if args.out:
@@ -289,13 +324,13 @@ def _cmd_demo(args) -> int:
 
     from . import plot
     from .experiments import run_paper_experiment
-    from .io import atomic_write, depth_to_points, write_array, write_ply
+    from .io import atomic_write, depth_to_points, make_output_folder, write_array, write_ply
     from .stereo import static_stereo
     from .rectify import cameras_to_toml
     from .synthetic import calibrated_plane_row, paper_pyramid, static_sequence
 
     out = _check_out_dir(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    make_output_folder(out, parents=True)  # removed again if the run fails or is interrupted (its parents it made too)
     print("nfdepth demo: the paper's pyramid, dynamic stereo (experiment 1) and static stereo")
     results = {}
     for name in ("exp1", "static"):
@@ -313,7 +348,7 @@ def _cmd_demo(args) -> int:
     # job as `nfdepth stereo --edges-only` on them: a depth map and a point cloud.
     scene = results["static"].scene
     example = out / "example"
-    (example / "rail").mkdir(parents=True, exist_ok=True)
+    make_output_folder(example / "rail", parents=True)
 
     def write_png16(path, frame):
         data = np.round(np.clip(frame, 0, 255) * 256.0).astype(np.uint16)
@@ -764,6 +799,10 @@ def _cmd_view(args) -> int:
     from .io import read_image, write_colormap_png
     from . import plot
 
+    if args.out is None:  # the default output: the input's name with .png, the input itself for a .png (told as no --out given)
+        default = Path(args.file).with_suffix(".png")
+        if _path_keys(default) & _path_keys(args.file):
+            raise CLIError(f"the default output '{default}' (the input's name with .png) is the input itself; give --out (--force never overwrites an input)")
     out = _check_output(args.out or str(Path(args.file).with_suffix(".png")), force=args.force, exts=(".png",), inputs=[args.file])
     for name, value in (("--vmin", args.vmin), ("--vmax", args.vmax)):
         if value is not None and not np.isfinite(value):

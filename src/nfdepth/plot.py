@@ -33,12 +33,15 @@ __all__ = [
 
 
 def save_figure(fig: Figure, path, *, dpi: int = 110, force: bool = True) -> Path:
-    """Write ``fig`` as PNG atomically (:func:`nfdepth.io.atomic_write`: mode from the umask); an existing ``path`` is replaced unless ``force=False``."""
+    """Write ``fig`` as PNG atomically (:func:`nfdepth.io.atomic_write`: mode from the umask); an existing ``path`` is replaced unless ``force=False``.
+
+    Missing folders of ``path`` are made (:func:`nfdepth.io.make_output_folder`: a failed or interrupted command-line run removes them again).
+    """
     from ._validate import as_path
-    from .io import atomic_write
+    from .io import atomic_write, make_output_folder
 
     path = as_path("path", path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    make_output_folder(path.parent, parents=True)
     FigureCanvasAgg(fig)
     return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi, bbox_inches="tight"), force=force)
 
