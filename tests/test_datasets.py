@@ -351,11 +351,15 @@ def test_middlebury2005_loader_decodes_its_files(tmp_path):
 
 def test_damaged_scene_files_are_named(tmp_path):
     folder = _write_art(tmp_path, dmin="abc")
-    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': '{folder / 'dmin.txt'}' should hold one number \(dmin in full-size px\), got 'abc'$"):
+    with pytest.raises(D.DataFileError, match=rf"^scene 'middlebury2005/Art': '{folder / 'dmin.txt'}' should hold one finite number \(dmin in full-size px\), got 'abc'$"):
         D.load_middlebury2005("Art", tmp_path)
     _write_art(tmp_path, dmin="")
-    with pytest.raises(DataNotFoundError, match=r"should hold one number \(dmin in full-size px\), got ''$"):
+    with pytest.raises(DataNotFoundError, match=r"should hold one finite number \(dmin in full-size px\), got ''$"):
         D.load_middlebury2005("Art", tmp_path)
+    for text in ("nan", "-inf", "1e999"):  # every depth of the scene would be NaN
+        _write_art(tmp_path, dmin=text)
+        with pytest.raises(D.DataFileError, match=rf"should hold one finite number \(dmin in full-size px\), got '{text}'$"):
+            D.load_middlebury2005("Art", tmp_path)
     colour = np.zeros((12, 16, 3), np.uint8)
     colour[..., 2] = 40
     _write_art(tmp_path, disp=colour)

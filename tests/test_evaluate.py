@@ -4,6 +4,7 @@ import dataclasses
 import json
 import math
 import re
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -436,6 +437,11 @@ def test_resolve_dataset_unknown(tmp_path):
         resolve_dataset("nosuch", data=tmp_path)
     with pytest.raises(ValueError, match="holds no known scene"):
         resolve_dataset(str(tmp_path), data=tmp_path)
+    # a folder at the top has fewer than two parents: it was an IndexError ('internal error' at the command line)
+    top = Path(tmp_path.anchor)
+    for folder in (top, top / tmp_path.parts[1]):
+        with pytest.raises(ValueError, match=rf"^dataset folder '{re.escape(str(folder.resolve()))}' holds no known scene"):
+            resolve_dataset(folder)
 
 
 ALL_SCENES = [

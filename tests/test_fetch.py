@@ -207,6 +207,31 @@ def test_fetch_from_a_mirror_then_load(shared, tmp_path, capsys, monkeypatch):
     assert D.data_root() == root
 
 
+def test_a_source_md_it_did_not_write_is_kept(shared, tmp_path):
+    """Fetching into a copy of the project's data replaced each curated SOURCE.md (scale, caveats) by the short one."""
+    import shutil
+
+    dest = tmp_path / "data"
+    shutil.copytree(shared / "tsukuba", dest / "tsukuba")
+    curated = (dest / "tsukuba" / "SOURCE.md").read_text(encoding="utf-8")
+    with serve(shared) as (url, seen):
+        nfdepth.fetch_data(dest, sets="tsukuba", mirror=url)  # every file intact: nothing downloaded
+        assert seen == []
+        assert (dest / "tsukuba" / "SOURCE.md").read_text(encoding="utf-8") == curated
+        (dest / "tsukuba" / "scene1.row3.col1.ppm").write_bytes(b"P6 1 1 255 abc")  # one file replaced: still not its own
+        nfdepth.fetch_data(dest, sets="tsukuba", mirror=url)
+        assert len(seen) == 1
+        assert (dest / "tsukuba" / "SOURCE.md").read_text(encoding="utf-8") == curated
+        # its own SOURCE.md is said again when it downloads (from another origin, say)
+        (dest / "tsukuba" / "SOURCE.md").write_text(F._source_text("tsukuba", "http://old.example.org"), encoding="utf-8")
+        nfdepth.fetch_data(dest, sets="tsukuba", mirror=url)  # nothing downloaded: kept as it is
+        assert "old.example.org" in (dest / "tsukuba" / "SOURCE.md").read_text(encoding="utf-8")
+        (dest / "tsukuba" / "scene1.row3.col1.ppm").unlink()
+        nfdepth.fetch_data(dest, sets="tsukuba", mirror=url)
+        text = (dest / "tsukuba" / "SOURCE.md").read_text(encoding="utf-8")
+        assert url in text and "old.example.org" not in text
+
+
 def test_a_corrupt_local_file_is_replaced(shared, tmp_path):
     dest = tmp_path / "data"
     bad = dest / "tsukuba" / "scene1.row3.col2.ppm"
@@ -315,15 +340,22 @@ def test_cli_fetch_says_where_and_how(shared, capsys, tmp_path):
 def test_cli_default_folder_is_found_automatically(shared, capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     monkeypatch.delenv("NFDEPTH_DATA", raising=False)
+    monkeypatch.chdir(tmp_path)  # no ../shared/data here
+    monkeypatch.setattr(D, "_repo_candidate", lambda: None)  # nor beside the installation
     with serve(shared) as (url, _):
         code, out, err = run_cli(capsys, "fetch-data", "--set", "skimage-motorcycle", "--mirror", url)
     default = tmp_path / "cache" / "nfdepth" / "data"
     assert code == 0, err
-    assert f"data ready in {default.resolve()}" in out and "found automatically" in out and "nfdepth evaluate motorcycle" in out
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(D, "_repo_candidate", lambda: None)
+    assert f"data ready in {default.resolve()}" in out and "found automatically (from this folder): nfdepth evaluate motorcycle" in out
     assert D.data_root() == default.resolve()
     assert D.list_scenes() == ["motorcycle"]
+    # a data folder found first (../shared/data, or one beside the installation): the hint says which, and how to use this one
+    monkeypatch.setattr(D, "_repo_candidate", lambda: shared)
+    with serve(shared) as (url, _):
+        code, out, err = run_cli(capsys, "fetch-data", "--set", "skimage-motorcycle", "--mirror", url)
+    assert code == 0, err
+    assert "found automatically" not in out
+    assert f"use it with: NFDEPTH_DATA={default.resolve()} nfdepth evaluate motorcycle" in out and f"nfdepth finds '{shared.resolve()}' first" in out
 
 
 # ------------------------------------------------------------------ more refusals and failures

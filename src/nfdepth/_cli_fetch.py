@@ -86,9 +86,18 @@ def _usage_hint(root: Path, sets) -> str:
     default = default_data_dir()
     if env and Path(env).expanduser().resolve() == root:
         return f"NFDEPTH_DATA points here: nfdepth evaluate {scene}"
+    use = f"use it with: NFDEPTH_DATA={root} nfdepth evaluate {scene} (or nfdepth evaluate {scene} --data {root})"
     if root == default.resolve() and not env:
-        return f"found automatically (when there is no ../shared/data): nfdepth evaluate {scene}"
-    return f"use it with: NFDEPTH_DATA={root} nfdepth evaluate {scene} (or nfdepth evaluate {scene} --data {root})"
+        from .datasets import DataNotFoundError, data_root
+
+        try:
+            found = data_root()  # ../shared/data, or one beside the installation, comes first
+        except DataNotFoundError:  # pragma: no cover - the folder was just filled
+            found = None
+        if found == root:
+            return f"found automatically (from this folder): nfdepth evaluate {scene}"
+        return f"{use}; without either, nfdepth finds '{found}' first"
+    return use
 
 
 def _cmd_fetch_data(args, CLIError) -> int:

@@ -27,6 +27,7 @@ name                   views (reference)    disparity   depth
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import zipfile
 import zlib
@@ -485,8 +486,10 @@ def load_middlebury2005(scene: str, root=None) -> MultiViewScene:
         raise DataFileError(f"scene {name!r}: cannot read '{dmin_p}': {reason}; expected one number (dmin in full-size px)") from None
     try:
         dmin = float(text.split()[0])
+        if not math.isfinite(dmin):  # nan or inf: every depth of the scene would be NaN
+            raise ValueError
     except (ValueError, IndexError):
-        raise DataFileError(f"scene {name!r}: '{dmin_p}' should hold one number (dmin in full-size px), got {text!r}") from None
+        raise DataFileError(f"scene {name!r}: '{dmin_p}' should hold one finite number (dmin in full-size px), got {text!r}") from None
     views = _read_views(name, views_p)
     disp = _read_coded_disparity(name, disp_p, 8.0)
     _check_shapes(name, views, disp, views_p, disp_p)

@@ -735,7 +735,7 @@ def resolve_dataset(dataset, data=None) -> tuple:
         if present:
             return path, _warn_incomplete(path, present)
         folders = {sub: name for name, (sub, _files) in datasets._SCENE_FILES.items()}
-        for depth in (1, 2):
+        for depth in (1, 2)[: len(path.parents)]:  # (a folder at the top, '/' or '/tmp', has fewer parents)
             parent = path.parents[depth - 1]
             rel = path.relative_to(parent).as_posix()
             if rel in folders:

@@ -468,13 +468,26 @@ def _sums_text(entries) -> str:
     return "".join(f"{e.sha256}  {e.path}\n" for e in entries)
 
 
+#: The line that opens the body of a SOURCE.md :func:`fetch_data` wrote (and may write again).
+_SOURCE_MARK = "Downloaded by `nfdepth fetch-data` "
+
+
+def _written_here(path: Path) -> bool:
+    """Whether ``path`` is a SOURCE.md that :func:`fetch_data` wrote (its third line opens with :data:`_SOURCE_MARK`)."""
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return False
+    return len(lines) > 2 and lines[2].startswith(_SOURCE_MARK)
+
+
 def _source_text(name: str, mirror: str | None) -> str:
     title, origins, creators, terms, truth = _SOURCES[name]
     fetched = f"from the mirror {mirror}/{name}/" if mirror else "from the pinned origin below"
     lines = [
         f"# {title}",
         "",
-        f"Downloaded by `nfdepth fetch-data` {fetched}; every file matched its known SHA-256",
+        f"{_SOURCE_MARK}{fetched}; every file matched its known SHA-256",
         "(check again with `sha256sum -c SHA256SUMS`). The project's own copies carry a longer SOURCE.md.",
         "",
         "- Origin: " + "; ".join(origins),
@@ -492,11 +505,14 @@ def fetch_data(dest=None, *, sets=None, mirror=None, progress=False) -> Path:
     The layout is that of ``shared/data`` (one folder per set, see
     :mod:`nfdepth.datasets`), so the result can be passed as ``root=`` to the
     loaders, as ``--data`` or ``NFDEPTH_DATA`` to ``nfdepth evaluate``; in
-    the default folder they find it by themselves. Files already present
+    the default folder they find it by themselves (after the folders
+    :func:`nfdepth.datasets.data_root` tries first). Files already present
     with the right hash are not downloaded again; a present file with another
     hash is replaced. Each set folder also gets ``SHA256SUMS`` and a short
     ``SOURCE.md`` (origin, citation, terms), written once all its files are
-    in place.
+    in place; a ``SOURCE.md`` already there is kept, unless this function
+    wrote it and downloaded files now (a copy's own, longer ``SOURCE.md`` is
+    never replaced).
 
     Parameters
     ----------
@@ -582,7 +598,9 @@ def fetch_data(dest=None, *, sets=None, mirror=None, progress=False) -> Path:
                 fetched += 1
             make(folder)
             _write_text(folder / "SHA256SUMS", _sums_text(entries))
-            _write_text(folder / "SOURCE.md", _source_text(name, base))
+            source = folder / "SOURCE.md"
+            if not source.exists() or (fetched and _written_here(source)):  # a curated SOURCE.md (the project's) is never replaced
+                _write_text(source, _source_text(name, base))
             total = _human_size(sum(e.size for e in entries))
             say(f"{name}: {len(entries)} files ({total}) in {folder}: {fetched} downloaded, {len(entries) - fetched} already there")
     except BaseException:
