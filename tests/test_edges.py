@@ -218,3 +218,115 @@ def test_a_linear_ramp_has_no_edge_points_inside(monkeypatch, use_numba):
     # a real edge of the faintest contrast the strong test keeps is still found
     step = [100 + 0.5 * np.tanh((c - 24.3 + 0.3 * t) / 1.5) for t in (-1, 0, 1)]
     assert fast.normal_flow_edges(step, sigma_px=sigma).mask[:, 23:26].any()
+
+
+def _dots_and_a_border_edge(t, dots=True, size=48):
+    """Small discs (corners everywhere along their rims) inside, a straight edge 2.5 px from the left border."""
+    r, c = np.mgrid[0:size, 0:size].astype(float)
+    x = c - 0.3 * t
+    discs = sum(((x - cx) ** 2 + (r - cy) ** 2 < 2.2**2) for cx in range(12, size - 8, 8) for cy in range(12, size - 8, 8))
+    return 100.0 * discs * dots + 60.0 * (x < 2.5)
+
+
+def test_no_edge_points_warning_judges_the_corner_rule_inside_the_border():
+    """Inside the border every strong zero crossing is a corner; the only straight edge lies in the border band.
+    The warning blamed the border ("lower sigma_px") although only raising max_corner_ratio keeps points; it
+    names the corner rule now, and still the border where nothing strong lies inside."""
+    from nfdepth.edges import _no_edge_points_warning
+
+    frames = [_dots_and_a_border_edge(t) for t in (-1, 0, 1)]
+    sel = select_edge_points(normal_flow(frames, sigma_px=1.5), gaussian_smooth(np.float32(frames[1]), sigma_px=1.5), border_px=4)
+    inside = np.zeros_like(sel.mask)
+    inside[4:-4, 4:-4] = True
+    strong = sel.zero_crossing & sel.strong
+    assert not sel.mask.any() and sel.border_px == 4
+    assert (strong & inside).sum() > 100 and (strong & inside & ~sel.corner).sum() == 0  # inside: corners only
+    assert (strong & ~inside & ~sel.corner).sum() > 10  # the straight edge, in the border band
+    w = _no_edge_points_warning(sel)
+    assert (w.rule, w.hint) == ("corner", "(raise max_corner_ratio to keep some)")
+    n = int((strong & inside).sum())
+    assert str(w) == f"no edge points: all {n} strong zero crossings away from the border are corners (raise max_corner_ratio to keep some)"
+    assert select_edge_points(normal_flow(frames, sigma_px=1.5), gaussian_smooth(np.float32(frames[1]), sigma_px=1.5), border_px=4, max_corner_ratio=1.0).mask.any()
+    # the edge alone: nothing strong inside, the border is to blame
+    frames = [_dots_and_a_border_edge(t, dots=False) for t in (-1, 0, 1)]
+    sel = select_edge_points(normal_flow(frames, sigma_px=1.5), gaussian_smooth(np.float32(frames[1]), sigma_px=1.5), border_px=4)
+    w = _no_edge_points_warning(sel)
+    assert (w.rule, w.hint) == ("border", "") and str(w).endswith("strong zero crossings all lie within border_px of the border")
+
+
+def test_no_edge_points_warning_of_a_pipeline_names_the_corner_rule():
+    """The same through static_stereo_edges (border 2.5 sigma_px = 4 px): the hint was "lower sigma_px"."""
+    import nfdepth
+
+    views = [_dots_and_a_border_edge(-k * 4 / 3, size=64) for k in (-1, 0, 1)]
+    cam = nfdepth.PinholeCamera(focal_px=100, width_px=64, height_px=64)
+    with pytest.warns(nfdepth.NoEdgePointsWarning) as said:
+        nfdepth.static_stereo_edges(views, camera=cam, baseline=0.1, sigma_px=1.5)
+    (w,) = said.list
+    assert (w.message.rule, w.message.hint) == ("corner", "(raise max_corner_ratio to keep some)")
+    assert re.fullmatch(r"all \d+ strong zero crossings in the reference image of shape \(64, 64\) away from the border are corners", w.message.reason)
+
+
+def _field_and_middle(shape=(10, 12)):
+    rng = np.random.default_rng(0)
+    frames = [rng.random(shape).astype(np.float32) * 100 for _ in range(3)]
+    return normal_flow(frames, sigma_px=1.0), gaussian_smooth(frames[1], sigma_px=1.0)
+
+
+def test_select_edge_points_refuses_non_finite_gradients_and_intensities():
+    """One NaN gradient made the percentile threshold NaN and every cell weak: 0 edge points, silently (one NaN
+    pixel of smoothed_middle: no zero crossing at all). NaN in grad_t, which the rules do not read, is accepted."""
+    from nfdepth.normal_flow import GradientField
+
+    g, middle = _field_and_middle()
+    clean = select_edge_points(g, middle, min_gradient=0.0, max_corner_ratio=1.0, border_px=0)
+    assert clean.mask.any()
+    for name, value, count in (("grad_col", np.nan, 1), ("grad_row", np.inf, 1), ("grad_row", -np.inf, 2)):
+        arrays = {k: getattr(g, k).copy() for k in ("grad_col", "grad_row", "grad_t")}
+        arrays[name].flat[:count] = value
+        with pytest.raises(ValueError, match=rf"^field\.{name} contains {count} non-finite \(NaN or inf\) value\(s\); expected finite gradients$"):
+            select_edge_points(GradientField(**arrays), middle)
+    bad = middle.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match=r"^smoothed_middle contains 1 non-finite \(NaN or inf\) value\(s\); expected finite intensities$"):
+        select_edge_points(g, bad)
+    grad_t = g.grad_t.copy()
+    grad_t[3, 3] = np.nan
+    same = select_edge_points(GradientField(g.grad_col, g.grad_row, grad_t), middle, min_gradient=0.0, max_corner_ratio=1.0, border_px=0)
+    np.testing.assert_array_equal(same.mask, clean.mask)
+
+
+def test_select_edge_points_refuses_a_malformed_field():
+    """A field of mismatched, 1-D, empty or complex gradients gave NumPy's errors from deep inside (a broadcast
+    error, IndexError, "ufunc 'hypot' not supported"); each is told with the attribute's name."""
+    from nfdepth.normal_flow import GradientField
+
+    g, middle = _field_and_middle()
+    gc, gr, gt = g.grad_col, g.grad_row, g.grad_t
+    cases = [
+        (GradientField(gc, gr[:-1], gt), ValueError, r"field's gradients must share one cell grid \(one shape\), got grad_col \(9, 11\), grad_row \(8, 11\), grad_t \(9, 11\)"),
+        (GradientField(gc, gr, gt[:, :-1]), ValueError, r"field's gradients must share one cell grid \(one shape\), got grad_col \(9, 11\), grad_row \(9, 11\), grad_t \(9, 10\)"),
+        (GradientField(gc[0], gr[0], gt[0]), ValueError, r"field\.grad_col must be a non-empty 2-D array on the cell grid \(rows - 1, cols - 1\), got shape \(11,\)"),
+        (GradientField(gc, gr[:0], gt), ValueError, r"field\.grad_row must be a non-empty 2-D array on the cell grid \(rows - 1, cols - 1\), got shape \(0, 11\)"),
+        (GradientField(gc.astype(np.complex64), gr, gt), TypeError, r"field\.grad_col must be real numbers, got dtype complex64"),
+        (GradientField(gc, gr, np.full(gt.shape, "a")), TypeError, r"field\.grad_t must be real numbers, got dtype <U1"),
+    ]
+    for field, error, message in cases:
+        with pytest.raises(error, match=rf"^{message}$"):
+            select_edge_points(field, middle)
+    with pytest.raises(TypeError, match=r"^field must be a nfdepth.GradientField \(from normal_flow\), got tuple$"):
+        select_edge_points((gc, gr, gt), middle)
+    # lists of numbers are arrays too
+    listed = select_edge_points(GradientField(gc.tolist(), gr.tolist(), gt.tolist()), middle)
+    np.testing.assert_array_equal(listed.mask, select_edge_points(g, middle).mask)
+
+
+def test_zero_crossings_of_big_endian_floats_are_those_of_native_ones():
+    """A big-endian float image is worked on in its own precision, as the native one: a '>f4' image went to
+    float64, whose Laplacian gives other signs than float32's at the corners near zero of a bump on a ramp
+    (168 zero crossings instead of 171 here)."""
+    r, c = np.mgrid[0:40, 0:50].astype(np.float64)
+    img = 1000.0 + 3.7 * c + 1.3 * r + 20.0 * np.exp(-((c - 25) ** 2 + (r - 20) ** 2) / 30.0)
+    for kind in ("f4", "f8"):
+        native = img.astype(kind)
+        np.testing.assert_array_equal(laplacian_zero_crossings(native.astype(">" + kind)), laplacian_zero_crossings(native))

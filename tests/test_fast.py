@@ -341,3 +341,46 @@ def test_a_flat_image_has_no_edge_points(shape):
     stream = fast.StreamingNormalFlow(sigma_px=2.0)
     results = [stream.push(f) for f in frames]
     assert not results[-1].mask.any()
+
+
+def test_intensities_too_small_for_float32_squares_are_refused():
+    """Frames scaled by 1e-22 gave NaN flows and a 1.3 % |grad I| error, by 1e-25 no edge point (float32 squares
+    of the gradients underflow; the reference's np.hypot does not). Frames whose peak is non-zero but below 1e-15
+    are refused with the advice to rescale; just above it the fast path still matches the reference."""
+    frames = _sequence()
+    peak = max(float(np.max(np.abs(f))) for f in frames)
+    tiny = [f * np.float32(1e-16 / peak) for f in frames]
+    with pytest.raises(ValueError, match=r"^frames\[0\] has intensities only up to 1e-16, below 1e-15: the float32 work squares gradients, .*rescale the intensities"):
+        normal_flow_edges(tiny, sigma_px=1.5)
+    stream = StreamingNormalFlow(sigma_px=1.5)
+    with pytest.raises(ValueError, match=r"^frame 0 has intensities only up to 1e-16, below 1e-15: "):
+        stream.push(tiny[0])
+    assert stream.frames_seen == 0
+    # zero is no scale: all-black frames pass (no edge point)
+    assert not normal_flow_edges([np.zeros((20, 24), np.float32)] * 3, sigma_px=1.0).mask.any()
+    # at twice the bound: the reference's results, to its usual tolerances
+    small = [f * np.float32(2e-15 / peak) for f in frames]
+    g, sel = _reference(small, sigma_px=1.5)
+    _assert_close(normal_flow_edges(small, sigma_px=1.5), g, sel)
+
+
+@pytest.mark.parametrize(("dark_side", "alpha"), [("right", np.pi), ("left", 0.0), ("below", -np.pi / 2), ("above", np.pi / 2)])
+def test_the_normal_of_an_axis_aligned_edge(dark_side, alpha):
+    """alpha = atan2(I_row, I_col) of a straight edge along a grid axis: pi where it is dark on the right (I_row
+    is exactly 0). The fallback's I_row, a sum of weighted taps, was float32 rounding (-6e-6) there, so it gave
+    alpha = -pi + 2e-7 (2 pi from the reference's +pi) at every edge point; now it is the reference's, exactly
+    (I_row set to +0 where the stencil's rows are equal). Along the rows the fallback's I_col is rounding in the
+    same way, which moves alpha from +-pi/2 by a float32 ulp (no wrap: within 2.4e-7)."""
+    c = np.arange(48, dtype=np.float64)[None, :].repeat(40, 0)
+    frames = [-100.0 * (c - 0.4 * t > 23.3) - 50.0 for t in (-1, 0, 1)]  # dark (lower) on the right
+    turn = {"right": lambda f: f, "left": lambda f: f[:, ::-1], "below": lambda f: f.T, "above": lambda f: f.T[::-1]}[dark_side]
+    frames = [np.ascontiguousarray(turn(f)) for f in frames]
+    g, sel = _reference(frames, sigma_px=1.5)
+    res = normal_flow_edges(frames, sigma_px=1.5)
+    np.testing.assert_array_equal(res.mask, sel.mask)
+    assert res.mask.sum() >= 30
+    np.testing.assert_array_equal(g.alpha[sel.mask], np.float32(alpha))
+    if dark_side in ("right", "left"):
+        np.testing.assert_array_equal(res.alpha[res.mask], np.float32(alpha))
+    else:
+        np.testing.assert_allclose(res.alpha[res.mask], alpha, rtol=0, atol=2.4e-7)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.special import erf
 
+from nfdepth._validate import MAX_SCALE_PX
 from nfdepth.normal_flow import (
     STENCILS,
     GradientField,
@@ -225,3 +226,93 @@ def test_smoothing_and_gradients_take_integer_and_list_images():
         g = gradients([image, image, image], stencil="simpson")
         np.testing.assert_allclose(g.grad_col[2:-2, 2:-2], 2.0)
         np.testing.assert_allclose(g.grad_row[2:-2, 2:-2], 1.0)
+
+
+@pytest.mark.parametrize("kind", ["f4", "f8"])
+def test_big_endian_floats_are_smoothed_as_native_ones(kind):
+    """A big-endian float array (np.load of a '>f4' .npy, FITS data) went to OpenCV as raw bytes: a constant 100
+    smoothed to 7e-41. Smoothing keeps a constant (the kernel sums to 1: float rounding only) and a big-endian
+    image gives the native image's result bit for bit, in the native byte order of its precision."""
+    native = np.full((6, 8), 100.0, dtype=kind)
+    big = native.astype(">" + kind)
+    for sigma in (0.0, 1.0, 2.5):
+        got = gaussian_smooth(big, sigma_px=sigma)
+        assert got.dtype == np.dtype(kind) and got.dtype.isnative
+        np.testing.assert_array_equal(got, gaussian_smooth(native, sigma_px=sigma))
+        np.testing.assert_allclose(got, 100.0, rtol=1e-6 if kind == "f4" else 1e-12)
+    # the gradients of big-endian frames: the ramp's exact gradient, in native floats
+    frames = [ramp(2.0, -3.0, 5.0, t).astype(">" + kind) for t in (-1, 0, 1)]
+    g = gradients(frames)
+    inner = (slice(2, -2), slice(2, -2))
+    assert g.grad_col.dtype == np.dtype(kind) and g.grad_col.dtype.isnative
+    for got, want in ((g.grad_col, 2.0), (g.grad_row, -3.0), (g.grad_t, 5.0)):
+        np.testing.assert_allclose(got[inner], want, rtol=1e-6 if kind == "f4" else 1e-12)
+
+
+def _dense_noise_gains(sigma_px, stencil, n_frames):
+    """The gains from the dense 2-D filters (Gaussian outer product, then the stencil on it): the brute force."""
+    import importlib
+
+    module = importlib.import_module("nfdepth.normal_flow")  # the module (nfdepth.normal_flow is also the function)
+
+    g = module._gaussian_kernel_1d(sigma_px)
+    pad = np.pad(np.outer(g, g), 3)
+    cell = 0.25 * (pad[:-1, :-1] + pad[:-1, 1:] + pad[1:, :-1] + pad[1:, 1:])
+    temporal = np.sqrt(2.0 * np.sum(cell**2)) / (2.0 if n_frames == 3 else 1.0)
+    weights = np.asarray(module._TEMPORAL_WEIGHTS[stencil] if n_frames == 3 else (0.5, 0.5))
+    gc, _ = module._cell_gradient(pad, stencil == "matched")
+    return temporal, np.sqrt(np.sum(gc**2) * np.sum(weights**2))
+
+
+@pytest.mark.parametrize("n_frames", [2, 3])
+@pytest.mark.parametrize("stencil", STENCILS)
+def test_noise_gains_are_those_of_the_dense_filters(stencil, n_frames):
+    """The gains come from 1-D factors (the filters are separable); they equal the dense 2-D filters' to 1e-12
+    relative (summation order: measured 3e-16)."""
+    for sigma in (0.0, 0.7, 1.5, 3.0):
+        got = noise_gains(sigma_px=sigma, stencil=stencil, n_frames=n_frames)
+        np.testing.assert_allclose(got, _dense_noise_gains(sigma, stencil, n_frames), rtol=1e-12, atol=0)
+
+
+def test_noise_gains_at_the_largest_smoothing():
+    """sigma_px = 1e4 (then allowed; 5000 now) built a dense (8 sigma + 1)**2 kernel: MemoryError (48 GB). Now it takes kilobytes.
+
+    At sigma = 5000 (OpenCV's kernel is a Gaussian up to 46341 taps, sigma 5792), the continuous limit: the
+    kernel g, truncated at 4 sigma and normalised (c = 1 / erf(4 / sqrt 2)), has sum(g**2) = c**2 erf(4) /
+    (2 sqrt(pi) sigma) (the 2-tap cell mean changes it by 1 / (8 sigma**2)), so I_t dt has std sqrt(2) S / 2
+    (a triple) or sqrt(2) S (a pair), S that sum; a difference of g has a sum of squares of c**2 / (4 sqrt(pi)
+    sigma**3) plus the truncation's two jumps of g(4 sigma), each once (two-point difference) or in three taps
+    (matched: (3/4 + 1/12)**2 + 2 (1/12)**2 = 102/144), and I_col's std is sqrt(S D sum(w**2)) with the frames'
+    weights w. What remains is the sums' end corrections, O(1 / sigma): measured 6e-8 and 3e-7; 1e-6 here."""
+    import tracemalloc
+
+    from scipy.special import erf
+
+    tracemalloc.start()
+    try:
+        temporal, spatial = noise_gains(sigma_px=MAX_SCALE_PX)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16 * 2**20 and 0 < spatial < temporal < 1
+    sigma = 5000.0
+    c = 1.0 / erf(4.0 / np.sqrt(2.0))
+    S = c**2 * erf(4.0) / (2.0 * np.sqrt(np.pi) * sigma)
+    g_end = c * np.exp(-8.0) / (np.sqrt(2.0 * np.pi) * sigma)
+    for stencil in STENCILS:
+        D = c**2 / (4.0 * np.sqrt(np.pi) * sigma**3) + 2.0 * (102.0 / 144.0 if stencil == "matched" else 1.0) * g_end**2
+        for n_frames, weights in ((2, (0.5, 0.5)), (3, (1 / 3, 1 / 3, 1 / 3) if stencil == "paper" else (1 / 6, 4 / 6, 1 / 6))):
+            want = (np.sqrt(2.0) * S / (2.0 if n_frames == 3 else 1.0), np.sqrt(S * D * np.sum(np.square(weights))))
+            np.testing.assert_allclose(noise_gains(sigma_px=sigma, stencil=stencil, n_frames=n_frames), want, rtol=1e-6, atol=0)
+
+
+def test_the_largest_smoothing_is_a_gaussian_of_its_sigma():
+    """OpenCV's kernel is a Gaussian up to 46341 taps only: at sigma 1e4 (then allowed) its spread was 24457 px."""
+    from nfdepth.normal_flow import _gaussian_kernel_1d
+
+    k = _gaussian_kernel_1d(MAX_SCALE_PX)
+    x = np.arange(k.size) - k.size // 2
+    # truncated at 4 sigma: the spread is sigma sqrt(1 - 8 phi(4) / (2 Phi(4) - 1)) = 0.99946 sigma
+    np.testing.assert_allclose(np.sqrt(np.sum(k * x**2) / np.sum(k)), 0.99946 * MAX_SCALE_PX, rtol=1e-4)
+    with pytest.raises(ValueError, match=r"^sigma_px = 5001 px is beyond any image: expected a Gaussian scale of at most 5000 px"):
+        gaussian_smooth(np.zeros((4, 4)), sigma_px=5001)

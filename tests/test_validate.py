@@ -149,7 +149,7 @@ def test_scale_px_caps_gaussian_scales():
     from nfdepth._validate import MAX_SCALE_PX, check_scale_px
 
     assert check_scale_px("sigma_px", 0) == 0.0 and check_scale_px("sigma_px", MAX_SCALE_PX) == MAX_SCALE_PX
-    with pytest.raises(ValueError, match=r"sigma_px = 1e\+300 px is beyond any image: expected a Gaussian scale of at most 10000 px"):
+    with pytest.raises(ValueError, match=r"sigma_px = 1e\+300 px is beyond any image: expected a Gaussian scale of at most 5000 px"):
         check_scale_px("sigma_px", 1e300)
     with pytest.raises(ValueError, match="a positive finite number"):
         check_scale_px("dense_window_px", 0, zero_ok=False)
@@ -303,6 +303,36 @@ def test_float32_images_refuse_intensities_whose_gradient_products_overflow():
         static_stereo(views, reference=1)
     with pytest.raises(ValueError, match=r"frames\[0\] has intensities up to"):
         normal_flow_edges(views, sigma_px=1.0)
+
+
+def test_images_whose_intensities_are_too_small_for_float32_squares_are_refused_where_asked():
+    """``min_peak`` (the fast path passes MIN_FLOAT32_INTENSITY = 1e-15): a non-zero peak below it is refused, with
+    the advice to rescale; zero is no scale and passes, as do NaN (reported as such) and images without the option."""
+    from nfdepth._validate import MIN_FLOAT32_INTENSITY, as_frames, as_image
+
+    tiny = np.full((4, 4), -3e-16)
+    with pytest.raises(ValueError, match=r"^im has intensities only up to 3e-16, below 1e-15: the float32 work squares gradients, which underflow below about 1e-19; rescale the intensities \(e\.g\. to 0-255 or 0-1\)$"):
+        as_image("im", tiny, min_peak=MIN_FLOAT32_INTENSITY)
+    with pytest.raises(ValueError, match=r"^frames\[1\] has intensities only up to 3e-16, below 1e-15"):
+        as_frames("frames", [np.ones((4, 4)), tiny], min_peak=MIN_FLOAT32_INTENSITY)
+    assert as_image("im", tiny).min() == np.float32(-3e-16)  # the reference path (np.hypot) takes them
+    assert as_image("im", np.full((4, 4), 1e-15), min_peak=MIN_FLOAT32_INTENSITY).max() == np.float32(1e-15)  # the bound itself
+    assert not as_image("im", np.zeros((4, 4)), min_peak=MIN_FLOAT32_INTENSITY).any()
+    with pytest.raises(ValueError, match=r"^im contains 16 non-finite"):
+        as_image("im", np.full((4, 4), np.nan), min_peak=MIN_FLOAT32_INTENSITY)
+
+
+def test_native_byte_order():
+    """Big-endian arrays (what OpenCV would read as garbage) come back native, with their values; native ones as they are."""
+    from nfdepth._validate import as_image, native
+
+    a = np.arange(12, dtype=np.float32).reshape(3, 4)
+    for kind in (">f4", ">f8", ">i2", "<f4", "=f8"):
+        got = native(a.astype(kind))
+        assert got.dtype.isnative and got.dtype.kind == np.dtype(kind).kind and got.dtype.itemsize == np.dtype(kind).itemsize
+        np.testing.assert_array_equal(got, a)
+    assert native(a) is a
+    assert as_image("im", a.astype(">f8")).dtype == np.float32 and as_image("im", a.astype(">f4"), np.float64).dtype.isnative
 
 
 class _BytesPath:

@@ -37,6 +37,7 @@ from ._validate import (
     check_scale_px,
     check_threshold,
     is_real_numeric,
+    native,
 )
 from .normal_flow import GradientField
 
@@ -88,7 +89,9 @@ def laplacian_zero_crossings(smoothed: np.ndarray) -> np.ndarray:
     if img.ndim != 2 or min(img.shape) < 2 or not is_real_numeric(img):
         msg = f"smoothed must be a real 2-D image of at least 2x2 pixels, got dtype {img.dtype}, shape {img.shape}"
         raise ValueError(msg)
-    if img.dtype not in (np.float32, np.float64):
+    if img.dtype.type in (np.float32, np.float64):
+        img = native(img)  # a big-endian float array in its own precision (OpenCV would read its bytes as native numbers)
+    else:
         img = img.astype(np.float64)  # OpenCV's Laplacian takes no int32/int64/bool input
     lap = cv2.Laplacian(img, -1, ksize=1, borderType=cv2.BORDER_REFLECT)
     corners = np.stack([lap[:-1, :-1], lap[:-1, 1:], lap[1:, :-1], lap[1:, 1:]])
@@ -126,7 +129,7 @@ def block_structure_tensor(grad_col: np.ndarray, grad_row: np.ndarray, *, window
         shape; worked on in float64. A NaN spreads over the window.
     window_sigma_px : float
         Standard deviation in px (cells) of the whole window once read back at the
-        cells, as :func:`corner_ratio` does: > 0, finite, at most 1e4. The block grid
+        cells, as :func:`corner_ratio` does: > 0, finite, at most 5000. The block grid
         gets a Gaussian of ``sqrt(window_sigma_px**2 - 1) / 2`` blocks (at least 0.1),
         truncated at 3 of its sigmas; windows of 1 px or less all get the minimal one.
 
@@ -140,7 +143,7 @@ def block_structure_tensor(grad_col: np.ndarray, grad_row: np.ndarray, *, window
     ------
     ValueError
         ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
-        ``window_sigma_px`` is not positive, not finite or above 1e4.
+        ``window_sigma_px`` is not positive, not finite or above 5000 (:data:`nfdepth._validate.MAX_SCALE_PX`).
     TypeError
         ``window_sigma_px`` is not a number (a str or bool too), or ``grad_col`` or
         ``grad_row`` is not real numbers (complex, text, objects).
@@ -217,7 +220,7 @@ def corner_ratio(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px:
     grad_col, grad_row : array_like, shape (h, w)
         Spatial derivatives at the cell centres, as in :func:`block_structure_tensor`.
     window_sigma_px : float
-        Standard deviation of the Gaussian window in px (> 0, finite, at most 1e4);
+        Standard deviation of the Gaussian window in px (> 0, finite, at most 5000);
         ``corner_window_px`` of :func:`select_edge_points`.
 
     Returns
@@ -231,7 +234,7 @@ def corner_ratio(grad_col: np.ndarray, grad_row: np.ndarray, *, window_sigma_px:
     ------
     ValueError
         ``grad_col`` and ``grad_row`` differ in shape, are not 2-D or are empty, or
-        ``window_sigma_px`` is not positive, not finite or above 1e4.
+        ``window_sigma_px`` is not positive, not finite or above 5000 (:data:`nfdepth._validate.MAX_SCALE_PX`).
     TypeError
         ``window_sigma_px`` is not a number (a str or bool too), or ``grad_col`` or
         ``grad_row`` is not real numbers (complex, text, objects).
@@ -272,6 +275,9 @@ class EdgeSelection:
         The gradient threshold used (intensity per pixel).
     corner_ratio : ndarray, shape (H-1, W-1)
         The structure-tensor eigenvalue ratio.
+    border_px : int
+        The border used: ``mask`` leaves out the ``border_px`` outermost rows and
+        columns of cells (all cells when the grid is not larger than ``2 border_px``).
     """
 
     mask: np.ndarray
@@ -280,6 +286,16 @@ class EdgeSelection:
     corner: np.ndarray
     min_gradient: float
     corner_ratio: np.ndarray
+    border_px: int = 0
+
+
+def _inside(shape, border_px: int) -> np.ndarray:
+    """Cells at least ``border_px`` from every side of a grid of ``shape`` (none when it is not larger than ``2 border_px``)."""
+    inside = np.zeros(shape, bool)
+    b = border_px
+    if shape[0] > 2 * b and shape[1] > 2 * b:
+        inside[b : shape[0] - b, b : shape[1] - b] = True
+    return inside
 
 
 class NoEdgePointsWarning(UserWarning):
@@ -323,7 +339,11 @@ def _no_edge_points_warning(
 
     ``where`` (e.g. " in the reference image") follows the rule's name;
     ``border`` says where the border rule left them (in the caller's
-    options); ``consequence`` ends the message.
+    options); ``consequence`` ends the message. The corner rule is judged on
+    the cells inside the border (``selection.border_px``) first: where strong
+    zero crossings lie there, all of them corners, the corner rule is to blame
+    even if some non-corner ones lie in the border band; the border only where
+    none lies inside.
     """
     zero = selection.zero_crossing
     if not zero.any():
@@ -337,10 +357,12 @@ def _no_edge_points_warning(
             consequence=consequence,
         )
     kept = strong & ~selection.corner
+    hint = "(raise max_corner_ratio to keep some)"
     if not kept.any():
-        return _no_edge_points(
-            f"all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners", "corner", "(raise max_corner_ratio to keep some)", consequence
-        )
+        return _no_edge_points(f"all {int(np.count_nonzero(strong))} strong zero crossings{where} are corners", "corner", hint, consequence)
+    inner = strong & _inside(strong.shape, selection.border_px)
+    if inner.any():  # the non-corner ones all lie in the border band, the ones inside are all corners
+        return _no_edge_points(f"all {int(np.count_nonzero(inner))} strong zero crossings{where} away from the border are corners", "corner", hint, consequence)
     return _no_edge_points(f"the {int(np.count_nonzero(kept))} strong zero crossings{where} all lie {border}", "border", consequence=consequence)
 
 
@@ -371,9 +393,11 @@ def select_edge_points(
     Parameters
     ----------
     field : GradientField
-        Gradients at cell centres (from :func:`nfdepth.normal_flow.normal_flow`).
+        Gradients at cell centres (from :func:`nfdepth.normal_flow.normal_flow`):
+        ``grad_col``, ``grad_row`` and ``grad_t`` real, non-empty, 2-D, of one shape
+        (H-1, W-1); ``grad_col`` and ``grad_row`` finite (``grad_t`` is not read).
     smoothed_middle : ndarray, shape (H, W)
-        The smoothed middle frame, for the Laplacian zero crossings.
+        The smoothed middle frame, for the Laplacian zero crossings: real, finite.
     min_gradient : float, optional
         Absolute gradient threshold in intensity per pixel. Default:
         ``relative_gradient`` times the 99th percentile of ``|grad I|``.
@@ -401,17 +425,27 @@ def select_edge_points(
         ``corner``: the strong zero crossings whose ``corner_ratio`` exceeds
         ``max_corner_ratio`` (or is NaN); ``min_gradient``: the threshold used (given or
         computed), a float; ``corner_ratio``: :func:`corner_ratio` with
-        ``corner_window_px``.
+        ``corner_window_px``; ``border_px``: the border used.
+
+    Raises
+    ------
+    TypeError
+        ``field`` is no :class:`~nfdepth.normal_flow.GradientField` or holds gradients
+        that are not real numbers (complex, text, objects); an option is not a number.
+    ValueError
+        ``field``'s gradients are not non-empty 2-D arrays of one shape, ``grad_col`` or
+        ``grad_row`` holds NaN or inf, ``smoothed_middle`` does (or is not one pixel
+        larger than the cell grid along each axis), or an option is out of its range.
     """
-    if not isinstance(field, GradientField):
-        msg = f"field must be a nfdepth.GradientField (from normal_flow), got {type(field).__name__}"
-        raise TypeError(msg)
+    grad_col, grad_row = _checked_field(field)
     smoothed_middle = np.asarray(smoothed_middle)
     border_px = check_int("border_px", border_px, 0)
-    mag = field.magnitude
+    mag = np.hypot(grad_col, grad_row)
     if smoothed_middle.shape != (mag.shape[0] + 1, mag.shape[1] + 1):
         msg = f"smoothed_middle must have shape {(mag.shape[0] + 1, mag.shape[1] + 1)}, got {smoothed_middle.shape}"
         raise ValueError(msg)
+    if is_real_numeric(smoothed_middle):  # otherwise laplacian_zero_crossings says what it is
+        _check_finite("smoothed_middle", smoothed_middle, "intensities")
     max_corner_ratio = check_fraction("max_corner_ratio", max_corner_ratio)
     corner_window_px = check_scale_px("corner_window_px", corner_window_px, zero_ok=False)
     if min_gradient is None:
@@ -425,11 +459,41 @@ def select_edge_points(
     except ValueError as exc:  # told with this function's parameter name
         raise ValueError(str(exc).replace("smoothed must", "smoothed_middle must", 1)) from None
     strong = (mag >= _comparable_threshold(min_gradient, mag.dtype)) & (mag > rounding_gradient_floor(smoothed_middle))
-    ratio = corner_ratio(field.grad_col, field.grad_row, window_sigma_px=corner_window_px)
+    ratio = corner_ratio(grad_col, grad_row, window_sigma_px=corner_window_px)
     corner = ~(ratio <= max_corner_ratio)
-    inside = np.zeros_like(zero)
-    b = border_px
-    if mag.shape[0] > 2 * b and mag.shape[1] > 2 * b:
-        inside[b : mag.shape[0] - b, b : mag.shape[1] - b] = True
-    mask = zero & strong & ~corner & inside
-    return EdgeSelection(mask, zero, strong, corner & zero & strong, float(min_gradient), ratio)
+    mask = zero & strong & ~corner & _inside(mag.shape, border_px)
+    return EdgeSelection(mask, zero, strong, corner & zero & strong, float(min_gradient), ratio, border_px)
+
+
+def _check_finite(name: str, arr: np.ndarray, what: str) -> None:
+    """Refuse NaN or inf in ``arr`` (two reductions, no temporary; counted only when there are some)."""
+    if arr.size and not (np.isfinite(arr.min()) and np.isfinite(arr.max())):  # NaN propagates into both, inf shows in one
+        bad = int(np.count_nonzero(~np.isfinite(arr)))
+        msg = f"{name} contains {bad} non-finite (NaN or inf) value(s); expected finite {what}"
+        raise ValueError(msg)
+
+
+def _checked_field(field) -> tuple[np.ndarray, np.ndarray]:
+    """``field``'s ``(grad_col, grad_row)`` as arrays, once the field is a :class:`GradientField` of
+    real, non-empty 2-D gradients of one shape, its spatial ones finite (``grad_t`` is not used here)."""
+    if not isinstance(field, GradientField):
+        msg = f"field must be a nfdepth.GradientField (from normal_flow), got {type(field).__name__}"
+        raise TypeError(msg)
+    grads = {}
+    for name in ("grad_col", "grad_row", "grad_t"):
+        arr = np.asarray(getattr(field, name))
+        if not is_real_numeric(arr):
+            msg = f"field.{name} must be real numbers, got dtype {arr.dtype}"
+            raise TypeError(msg)
+        if arr.ndim != 2 or arr.size == 0:
+            msg = f"field.{name} must be a non-empty 2-D array on the cell grid (rows - 1, cols - 1), got shape {arr.shape}"
+            raise ValueError(msg)
+        grads[name] = arr
+    shapes = {name: arr.shape for name, arr in grads.items()}
+    if len(set(shapes.values())) > 1:
+        listed = ", ".join(f"{name} {shape}" for name, shape in shapes.items())
+        msg = f"field's gradients must share one cell grid (one shape), got {listed}"
+        raise ValueError(msg)
+    for name in ("grad_col", "grad_row"):
+        _check_finite(f"field.{name}", grads[name], "gradients")
+    return grads["grad_col"], grads["grad_row"]

@@ -104,7 +104,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_fraction, check_frame_interval, check_int, check_scale_px, check_threshold
+from ._validate import MIN_FLOAT32_INTENSITY, as_frames, as_image, check_fraction, check_frame_interval, check_int, check_scale_px, check_threshold
 from .edges import ROUNDING_GRADIENT, ROUNDING_LAPLACIAN, _block_read_back, _comparable_threshold, _corner_window_blocks
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, _TEMPORAL_WEIGHTS, _check_stencil
 
@@ -245,7 +245,7 @@ class _Workspace(_Pool):
         f32 = np.float32
         self.A = np.empty((H, W), f32)  # weighted sum -> Laplacian -> product
         self.D = np.empty((H, W), f32)  # f2 - f0 -> smoothed middle frame -> product
-        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum -> product
+        self.Gs = np.empty((H, W), f32)  # smoothed weighted sum (read again at the candidates)
         self.gt = np.empty((H, W), f32)  # I_t at cells ([:h, :w])
         self.gc = np.empty((H, W), f32)  # I_col at cells ([:h, :w])
         self.gr = np.empty((H, W), f32)  # I_row at cells ([:h, :w])
@@ -822,10 +822,10 @@ def _blur_strips(srcs, dsts, k: _Kernels, threads: int, scratch) -> None:
 def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
     """Everything after smoothing: stencils, flow, angle, edge points.
 
-    ``Gs`` (smoothed weighted sum) and ``gt_full`` (I_t at cells) may be
-    overwritten; ``G1`` (smoothed middle frame) is only read. Scratch use of
-    the workspace: ``A`` (Laplacian), then ``Gs``, ``gt`` and ``D`` hold the
-    structure-tensor products.
+    ``Gs`` (smoothed weighted sum) and ``G1`` (smoothed middle frame) are
+    only read; ``gt_full`` (I_t at cells) may be overwritten. Scratch use of
+    the workspace: ``A`` (Laplacian), then ``A``, ``gt`` and ``D`` hold the
+    structure-tensor products (``Gs`` is read again at the candidates).
     """
     p = k.p
     H, W = ws.shape
@@ -909,7 +909,7 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
             hb, wb = T.shape[0], T.shape[1]
             rows0, cols0 = 2 * np.arange(hb), 2 * np.arange(wb)
             rows1, cols1 = np.minimum(rows0 + 1, h - 1), np.minimum(cols0 + 1, w - 1)
-            for ch, (buf, (u, v)) in enumerate(zip((ws.Gs, ws.gt, ws.D), ((gc, gc), (gr, gr), (gc, gr)))):
+            for ch, (buf, (u, v)) in enumerate(zip((ws.A, ws.gt, ws.D), ((gc, gc), (gr, gr), (gc, gr)))):
                 prod = buf[:h, :w]
                 cv2.multiply(u, v, dst=prod)
                 top, bot = prod[rows0], prod[rows1]
@@ -921,23 +921,37 @@ def _finish(ws: _Workspace, k: _Kernels, Gs, G1, gt_full) -> NormalFlowEdges:
                 idx = np.flatnonzero(mask[r0:r1])
                 if idx.size:
                     idx += r0 * w
-                    _sparse(ws, alpha, mask, idx, w, p.max_corner_ratio)
+                    _sparse(ws, alpha, mask, idx, w, p.max_corner_ratio, Gs, k.matched, peak)
     return NormalFlowEdges(vn, alpha, mag, mask, float(min_gradient))
 
 
 _BAND_CELLS = 16384
 
 
-def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
-    """Exact angle and corner rejection at the candidate cells ``idx`` (flat, cell grid)."""
+def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio, Gs, matched, peak):
+    """Exact angle and corner rejection at the candidate cells ``idx`` (flat, cell grid).
+
+    ``Gs``: the smoothed weighted sum; ``peak``: the largest ``|value|`` of the smoothed middle frame.
+    """
     fi = idx + idx // w  # flat index into the (H, W) buffers
+    rr, cc = idx // w, idx % w
     # Angle at the candidate edge points (float64 atan2, as the reference).
     gcs = ws.gc.ravel()[fi].astype(np.float64)
     grs = ws.gr.ravel()[fi].astype(np.float64)
+    # Where the stencil's rows of Gs are equal (an edge along the columns), the reference's
+    # differences give I_row = +0 exactly, but cv2.filter2D's sum of weighted taps leaves
+    # float32 rounding of either sign (-6e-6 at -150 grey levels): an edge dark on the right
+    # got alpha = -pi + 2e-7 instead of +pi. I_row is set to +0 there (nowhere else). Only
+    # cells whose |I_row| is within rounding are looked at (looking at every candidate cost
+    # a quarter more time): a sum of at most 8 taps (sum |k| <= 2) errs by at most about
+    # 8 * 2**-24 * 2 = 1e-6 of the largest |value| it reads, and 1e-5 of the middle frame's
+    # peak leaves room for outer frames brighter than it.
+    near = np.flatnonzero(np.abs(grs) <= 1e-5 * peak)
+    if near.size:
+        grs[near[_equal_rows(Gs, rr[near], cc[near], matched)]] = 0.0
     alpha.ravel()[idx] = np.arctan2(grs, gcs)
     # Eigenvalue ratio of the block tensor read back bilinearly (float64, as the reference).
     r0, r1, wr0, wr1, c0, c1, wc0, wc1 = ws.read_back
-    rr, cc = idx // w, idx % w
     T = ws.tensor
     ua, ub, wa, wb = wc0[cc, None], wc1[cc, None], wr0[rr, None], wr1[rr, None]
     top = wa * T[r0[rr], c0[cc]].astype(np.float64) + wb * T[r1[rr], c0[cc]].astype(np.float64)
@@ -950,6 +964,18 @@ def _sparse(ws: _Workspace, alpha, mask, idx, w, max_ratio):
     with np.errstate(divide="ignore", invalid="ignore"):
         ok = (lam1 > 0) & (lam2 / lam1 <= max_ratio)
     mask.ravel()[idx[~ok]] = False
+
+
+def _equal_rows(Gs, rr, cc, matched) -> np.ndarray:
+    """True at cells ``(rr, cc)`` whose row stencil reads equal values of ``Gs`` (rows ``r-1 .. r+2``
+    edge-clamped for the matched stencil, else ``r, r+1``; columns ``c, c+1``): the reference's I_row is +0 there."""
+    last = Gs.shape[0] - 1
+    equal = np.ones(rr.shape, bool)
+    for col in (cc, cc + 1):
+        first = Gs[rr, col]
+        for dr in (-1, 1, 2) if matched else (1,):
+            equal &= Gs[np.clip(rr + dr, 0, last), col] == first
+    return equal
 
 
 def _peak(G1) -> float:
@@ -986,7 +1012,10 @@ def normal_flow_edges(
     Parameters
     ----------
     frames : sequence of 3 ndarray (H, W), or ndarray (3, H, W)
-        Equally spaced grey frames in time order (converted to float32).
+        Equally spaced grey frames in time order (converted to float32), finite,
+        each of largest ``|value|`` 0 or from 1e-15 to 1e15: the float32 squares of
+        gradients underflow below (``_validate.MIN_FLOAT32_INTENSITY``) and overflow
+        above; rescale such intensities.
     sigma_px : float
         Gaussian smoothing in pixels (0: none).
     frame_interval : float
@@ -1014,7 +1043,8 @@ def normal_flow_edges(
     """
     p = _params(sigma_px, frame_interval, stencil, min_gradient, relative_gradient, max_corner_ratio, corner_window_px, border_px)
     threads = _threads(threads)
-    f0, f1, f2 = as_frames("frames", frames, 3, dtype=np.float32)
+    # frames whose intensities are all tiny are refused: float32 squares of their gradients underflow (see MIN_FLOAT32_INTENSITY)
+    f0, f1, f2 = as_frames("frames", frames, 3, dtype=np.float32, min_peak=MIN_FLOAT32_INTENSITY)
     k = _kernels(p)
     ws = _workspace(f0.shape)
     if isinstance(ws, _NbWorkspace):
@@ -1092,7 +1122,7 @@ class StreamingNormalFlow:
 
     def push(self, frame) -> NormalFlowEdges | None:
         """Add the next frame; return the result for the latest triple, or None before the third frame."""
-        img = as_image(f"frame {self._count}", frame, np.float32)
+        img = as_image(f"frame {self._count}", frame, np.float32, min_peak=MIN_FLOAT32_INTENSITY)
         if self._shape is None:
             self._shape = img.shape
             self._numba = USE_NUMBA

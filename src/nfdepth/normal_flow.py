@@ -48,7 +48,7 @@ import cv2
 import numpy as np
 
 from ._quantile import percentile
-from ._validate import as_frames, as_image, check_frame_interval, check_int, check_scale_px, float_dtype, is_real_numeric
+from ._validate import as_frames, as_image, check_frame_interval, check_int, check_scale_px, float_dtype, is_real_numeric, native
 
 __all__ = [
     "STENCILS",
@@ -143,7 +143,8 @@ _FLOAT_TYPES = (np.float32, np.float64)
 
 def _real_image(name: str, image) -> np.ndarray:
     """A 2-D, non-empty, real numeric array (no pass over its values: NaN stays NaN); integer or boolean
-    images become float64 (smoothing them in their own type would round the result)."""
+    images become float64 (smoothing them in their own type would round the result), big-endian floats
+    native ones of their precision (OpenCV reads the bytes as native numbers: garbage, silently)."""
     arr = np.asarray(image)
     if not is_real_numeric(arr):
         msg = f"{name} must be a real numeric 2-D array, got dtype {arr.dtype}"
@@ -151,7 +152,7 @@ def _real_image(name: str, image) -> np.ndarray:
     if arr.ndim != 2 or arr.size == 0:
         msg = f"{name} must be a non-empty 2-D image (rows, cols), got shape {arr.shape}"
         raise ValueError(msg)
-    return arr if arr.dtype.type in _FLOAT_TYPES else arr.astype(np.float64)
+    return native(arr) if arr.dtype.type in _FLOAT_TYPES else arr.astype(np.float64)
 
 
 def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
@@ -165,17 +166,17 @@ def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
     Parameters
     ----------
     image : array_like, shape (H, W)
-        A non-empty 2-D array of real numbers (or booleans). Its values are not
-        checked: a NaN or inf spreads over the kernel's reach.
+        A non-empty 2-D array of real numbers (or booleans), in either byte order.
+        Its values are not checked: a NaN or inf spreads over the kernel's reach.
     sigma_px : float
         Standard deviation of the Gaussian in pixels: finite, from 0 (no smoothing)
-        to 1e4.
+        to 5000.
 
     Returns
     -------
     ndarray, shape (H, W)
-        A new array (never a view of ``image``): float32 for float32 input, float64
-        for float64, integer, boolean or other real input.
+        A new array (never a view of ``image``), in the machine's byte order: float32
+        for float32 input, float64 for float64, integer, boolean or other real input.
 
     Raises
     ------
@@ -184,7 +185,7 @@ def gaussian_smooth(image: np.ndarray, *, sigma_px: float) -> np.ndarray:
         a number (a str or bool too).
     ValueError
         ``image`` is not 2-D or is empty, or ``sigma_px`` is negative, not finite or
-        above 1e4.
+        above 5000.
     """
     sigma_px = check_scale_px("sigma_px", sigma_px)
     image = _real_image("image", image)
@@ -408,7 +409,7 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     ----------
     sigma_px : float
         Standard deviation of the Gaussian smoothing in px, as given to
-        :func:`gaussian_smooth` or :func:`normal_flow`: finite, from 0 (none) to 1e4.
+        :func:`gaussian_smooth` or :func:`normal_flow`: finite, from 0 (none) to 5000.
     stencil : {"matched", "simpson", "paper"}
         Gradient stencil (module docstring); it changes only the spatial gain.
     n_frames : int
@@ -428,7 +429,7 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
     ------
     ValueError
         ``stencil`` is not one of :data:`STENCILS` (a non-str too), ``n_frames`` is
-        not 2 or 3, or ``sigma_px`` is negative, not finite or above 1e4.
+        not 2 or 3, or ``sigma_px`` is negative, not finite or above 5000 (:data:`nfdepth._validate.MAX_SCALE_PX`).
     TypeError
         ``n_frames`` is not an integer (a float such as ``3.0`` or a bool too), or
         ``sigma_px`` is not a number (a str or bool too).
@@ -438,15 +439,20 @@ def noise_gains(*, sigma_px: float, stencil: str = "matched", n_frames: int = 3)
         msg = f"n_frames must be 2 (the two-image variant) or 3 (a triple), got {n_frames!r}"
         raise ValueError(msg)
     g = _gaussian_kernel_1d(check_scale_px("sigma_px", sigma_px))
-    g2 = np.outer(g, g)
-    pad = np.pad(g2, 3)
-    cell = 0.25 * (pad[:-1, :-1] + pad[:-1, 1:] + pad[1:, :-1] + pad[1:, 1:])
+    # The effective 2-D filters are separable: the Gaussian is outer(g, g), the cell mean
+    # outer(m, m) of the 2-tap mean m, and I_col's stencil outer(m, d) (the mean along rows,
+    # the difference d along columns). A sum of squares of an outer product is the product of
+    # the factors' sums of squares, so 1-D sums suffice (a dense (8 sigma + 1)**2 kernel
+    # took 48 GB at sigma_px = 1e4). Zero padding of 3 taps holds the stencil's full reach.
+    pad = np.pad(g, 3)
+    mean = 0.5 * (pad[:-1] + pad[1:])
+    diff = _diff(pad[None, :], stencil == "matched", axis=1)[0]
+    cell_sq = np.sum(mean**2) ** 2  # sum of the squared 2-D cell-mean filter
     if n_frames == 3:
-        temporal = np.sqrt(2.0 * np.sum(cell**2)) / 2.0
+        temporal = np.sqrt(2.0 * cell_sq) / 2.0
         weights = np.asarray(_TEMPORAL_WEIGHTS[stencil])
     else:
-        temporal = np.sqrt(2.0 * np.sum(cell**2))
+        temporal = np.sqrt(2.0 * cell_sq)
         weights = np.array([0.5, 0.5])
-    gc, _ = _cell_gradient(pad, stencil == "matched")
-    spatial = np.sqrt(np.sum(gc**2) * np.sum(weights**2))
+    spatial = np.sqrt(np.sum(mean**2) * np.sum(diff**2) * np.sum(weights**2))
     return float(temporal), float(spatial)
