@@ -1,5 +1,7 @@
 """Camera and motion model (paper eq. 1, 3, 4) against hand-derived values."""
 
+import copy
+import pickle
 import re
 
 import numpy as np
@@ -261,3 +263,39 @@ def test_camera_functions_refuse_complex_text_and_wrong_motions():
     fu, fv = image_flow_px(cam, [1.0, 5.0], [1.0, 5.0], [0.0, 0.0], RigidMotion((1, 0, 0)))
     assert not np.isfinite(fu).any() and not np.isfinite(fv).any()
     assert not np.isfinite(normal_flow_px(cam, 1.0, 1.0, 0.0, 0.5, RigidMotion((1, 0, 0))))
+
+
+def test_motions_compare_and_hash_by_their_vectors():
+    """``==``, ``!=`` and ``in`` raised NumPy's "truth value of an array is ambiguous", ``hash()`` "unhashable type: 'numpy.ndarray'"
+    (the dataclass compared and hashed its arrays as tuples)."""
+    a = RigidMotion(translation=[1.0, 0.0, 0.0], rotation=[0.0, 0.0, 0.01])
+    b = RigidMotion(translation=(1, 0, 0), rotation=np.array([0.0, 0.0, 0.01]))
+    c = RigidMotion(translation=[1.0, 0.0, 0.0])
+    assert a == b and (a != b) is False and a in [c, b]
+    assert a != c and (a == c) is False and a not in [c]
+    assert hash(a) == hash(b) and len({a, b, c}) == 2 and {a: 1}[b] == 1
+    assert RigidMotion((0.0, 0.0, 0.0)) == RigidMotion((-0.0, 0.0, 0.0))  # as np.array_equal: and they hash alike
+    assert hash(RigidMotion((0.0, 0.0, 0.0))) == hash(RigidMotion((-0.0, 0.0, 0.0)))
+    assert a != "motion" and (a == (a.translation, a.rotation)) is False and a not in [None, 5]
+
+
+def test_motion_keeps_read_only_copies_of_its_vectors():
+    """A "frozen" motion held the caller's arrays: changing them (or ``motion.translation[0] = ...``) changed the motion."""
+    t, w = np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 0.1])
+    m = RigidMotion(t, w)
+    t[0], w[2] = 9.0, 0.5
+    np.testing.assert_array_equal(m.translation, [1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(m.rotation, [0.0, 0.0, 0.1])
+    for vec in (m.translation, m.rotation):
+        with pytest.raises(ValueError, match="read-only"):
+            vec[0] = 5.0
+    assert (m + m).translation.flags.writeable is False and (-m).rotation.flags.writeable is False
+    for copied in (copy.copy(m), copy.deepcopy(m), pickle.loads(pickle.dumps(m))):
+        assert copied == m and not copied.translation.flags.writeable and not copied.rotation.flags.writeable
+
+
+def test_camera_given_numpy_numbers_stores_python_ones():
+    """A 0-d array given for focal_px or cx_px was kept: the camera could not be hashed (TypeError: unhashable type)."""
+    cam = PinholeCamera(np.array(100.0), np.int64(200), np.int32(160), np.array(99.5), np.float32(79.5))
+    assert cam == PinholeCamera(100.0, 200, 160) and hash(cam) == hash(PinholeCamera(100.0, 200, 160))
+    assert [type(v) for v in (cam.focal_px, cam.width_px, cam.height_px, cam.cx_px, cam.cy_px)] == [float, int, int, float, float]

@@ -220,7 +220,10 @@ def test_missing_poses_file_names_the_rig(tmp_path, capsys):
         (lambda d: d["motion"].update(velocity=[1.0, 2.0]), r"motion\.velocity = \[1\.0, 2\.0\]: expected 3 finite numbers"),
         (lambda d: d["motion"].update(rotation_deg="fast"), r"motion\.rotation_deg = 'fast': expected 3 finite numbers"),
         (lambda d: d["motion"].update(frame_interval=0), r"motion\.frame_interval = 0: expected a number > 0"),
-        (lambda d: d["motion"].update(frame_interval=1e-300), r"motion\.frame_interval = 1e-300: expected a time step within 1e-30\.\.1e\+30"),
+        (lambda d: d["motion"].update(frame_interval=1e-300), r"motion\.frame_interval = 1e-300: expected a time step within 1e-30\.\.5e\+29"),
+        # dynamic_stereo's bound (I1, I3, I5 two intervals apart): 6e29 passed the parser, then was refused without the key
+        (lambda d: d["motion"].update(frame_interval=6e29),
+         r"^motion\.frame_interval = 6e\+29: expected a time step within 1e-30\.\.5e\+29 \(the moving camera's images I1, I3, I5 are two intervals apart; give times"),
         (lambda d: d["camera"].update(focal_px=1e300), r"camera\.focal_px = 1e\+300: expected a focal length of 1e-30 to 1e\+30 \(give it in a unit"),
         (lambda d: d["motion"].update(velocity=[1e300, 0.0, 0.0]), r"motion\.velocity = \[1e\+300, 0\.0, 0\.0\]: expected a speed of 1e-30 to 1e\+30"),
         (lambda d: d["stereo"].update(baseline=1e-300), r"stereo\.baseline = 1e-300: expected a baseline of 1e-30 to 1e\+30"),
@@ -397,6 +400,11 @@ def test_load_rig_file_errors(tmp_path):
         ("frame,x,y,z\n-1,0,0,0\n", r"line 2: frame = '-1': expected an integer frame index >= 0$"),
         ("frame,x,y,z\n0,0,abc,0\n", r"line 2: y = 'abc': expected a finite number"),
         ("frame,x,y,z\n1,0,0,0\n0,1,0,0\n", r"line 3: frame indices must be strictly increasing"),
+        # beyond int64: was an OverflowError (an internal error in the CLI); from 2**53 whole numbers are no longer exact as floats
+        ("frame,x,y,z\n0,0,0,0\n9223372036854775808,0.1,0,0\n",
+         r"line 3: frame = '9223372036854775808': expected a frame index below 9007199254740992 \(2\*\*53, where whole numbers stop being exact in floating point\)$"),
+        ("frame,x,y,z\n9007199254740992,0,0,0\n", r"line 2: frame = '9007199254740992': expected a frame index below 9007199254740992"),
+        ("frame,x,y,z\n1e300,0,0,0\n", r"line 2: frame = '1e300': expected a frame index below"),
         ("frame,x,y,z\n", r"no data rows"),
     ],
 )
@@ -679,3 +687,152 @@ def test_stereo_options_take_a_hand_built_direction_of_any_length():
         built = dataclasses.replace(rig, stereo=StereoSpec(baseline=1.0, direction=np.array(direction)))
         with pytest.raises(RigError, match=r"^stereo\.direction = .*: expected \[1, 0, 0\] or \[0, 1, 0\] for nfdepth stereo"):
             stereo_options_from_rig(built)
+
+
+def test_poses_frame_indices_up_to_the_bound(tmp_path, capsys, paper_pngs):
+    """The largest frame index kept exact is read; one beyond int64 in a rig's poses stops ``nfdepth dynamic`` with one line
+    naming the rig, the CSV, its line and the value (was: internal error (OverflowError), exit 1)."""
+    p = tmp_path / "p.csv"
+    p.write_text("frame,x,y,z\n0,0,0,0\n9007199254740991,0.1,0,0\n")
+    assert load_poses(p).frames.tolist() == [0, 2**53 - 1]
+    p.write_text("frame,x,y,z\n0,0,0,0\n9223372036854775808,0.1,0,0\n")
+    rig = tmp_path / "r.toml"
+    rig.write_text('[camera]\nfocal_px = 100.0\nwidth_px = 200\nheight_px = 200\n[motion]\nvelocity = [2.0, 0, 0]\n[video]\nposes = "p.csv"\n')
+    code, out, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", rig, "--out", tmp_path / "z.npy")
+    assert (code, out) == (2, "")
+    assert err == (
+        f"nfdepth: error: rig '{rig}': poses '{p}' line 3: frame = '9223372036854775808': expected a frame index below"
+        " 9007199254740992 (2**53, where whole numbers stop being exact in floating point)\n"
+    )
+    assert not (tmp_path / "z.npy").exists()
+
+
+def test_frame_interval_bound_is_dynamic_stereos(paper_scene):
+    """The parser takes the intervals :func:`nfdepth.pipelines.dynamic_stereo` takes: up to 5e29, not 1e30."""
+    from nfdepth.pipelines import dynamic_stereo
+    from nfdepth.rig import MAX_FRAME_INTERVAL
+
+    d = copy.deepcopy(BASE)
+    d["motion"]["frame_interval"] = MAX_FRAME_INTERVAL
+    assert rig_from_dict(d).frame_interval == 5e29
+    beyond = float(np.nextafter(MAX_FRAME_INTERVAL, np.inf))
+    d["motion"]["frame_interval"] = beyond
+    with pytest.raises(RigError, match=r"^motion\.frame_interval = 5\.000000000000001e\+29: expected a time step within 1e-30\.\.5e\+29"):
+        rig_from_dict(d)
+    rig = rig_from_dict(BASE)
+    with pytest.raises(ValueError, match=r"^frame_interval = 5e\+29 is outside 1e-30\.\.5e\+29"):
+        dynamic_stereo(list(paper_scene.frames), camera=rig.camera, relative_motion=rig.relative_motion(), frame_interval=beyond)
+
+
+def test_rig_from_dict_takes_tuples_and_arrays():
+    """A dict built in Python holds tuples and NumPy arrays (cv2.calibrateCamera's distortion is a (1, 5) array): they were
+    refused as "motion.velocity = [2.0, 0.0, 0.0]: expected 3 finite numbers [x, y, z]", the very value shown as a list."""
+    d = copy.deepcopy(BASE)
+    d["camera"]["distortion"] = [-0.1, 0.01, 0.0, 0.0, 0.0]
+    d["stereo"].update(positions=[0.0, 1.0, 2.5], column_positions=[0.0, 1.0], disparity_range_px=[0.0, 8.0])
+    d["video"] = {"positions": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]}
+    expected = rig_from_dict(d)
+    e = copy.deepcopy(d)
+    e["camera"]["distortion"] = np.array([[-0.1, 0.01, 0.0, 0.0, 0.0]])
+    e["motion"].update(velocity=(2.0, 0.0, 0.0), rotation_deg=np.zeros(3))
+    e["stereo"].update(positions=(0.0, 1.0, 2.5), column_positions=np.array([0, 1]), disparity_range_px=(0.0, 8.0))
+    e["video"] = {"positions": np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])}
+    assert rig_from_dict(e) == expected
+    e["camera"]["distortion"] = np.array([[-0.1], [0.01], [0.0], [0.0], [0.0]])  # a column
+    e["video"] = {"positions": ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), np.array([2.0, 0.0, 0.0]))}
+    assert rig_from_dict(e) == expected
+    assert rig_from_dict(tomllib.loads(rig_to_toml(rig_from_dict(e)))) == expected
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "value", "message"),
+    [
+        ("motion", "velocity", "2, 0, 0", r"^motion\.velocity = '2, 0, 0': expected 3 finite numbers \[x, y, z\] \(a str, not a list\)$"),
+        ("motion", "velocity", {"x": 2.0}, r"^motion\.velocity = \{'x': 2\.0\}: expected 3 finite numbers \[x, y, z\] \(a dict, not a list\)$"),
+        ("motion", "velocity", np.array([[2.0, 0.0, 0.0]]), r"^motion\.velocity = \[\[2\.0, 0\.0, 0\.0\]\]: expected 3 finite numbers \[x, y, z\] \(an array of shape \(1, 3\), not a list\)$"),
+        ("motion", "velocity", np.array([True, False, False]), r"^motion\.velocity = \[True, False, False\]: expected 3 finite numbers \[x, y, z\]$"),
+        ("camera", "distortion", np.zeros((2, 4)), r"^camera\.distortion = \[\[0\.0, 0\.0, 0\.0, 0\.0\], \[0\.0, 0\.0, 0\.0, 0\.0\]\]: expected 4, 5 or 8 finite numbers, OpenCV's \[k1, k2, p1, p2, k3, k4, k5, k6\] \(an array of shape \(2, 4\), not a list\)$"),
+        ("camera", "distortion", "-0.1 0.01 0 0", r"^camera\.distortion = '-0\.1 0\.01 0 0': expected 4, 5 or 8 finite numbers, .* \(a str, not a list\)$"),
+        ("stereo", "positions", "0 1 2", r"^stereo\.positions = '0 1 2': expected a list of 2 or more finite numbers \(units of the baseline\) \(a str, not a list\)$"),
+        ("video", "velocity", 1.0, r"^video\.velocity = 1\.0: expected 3 finite numbers \[x, y, z\] \(a float, not a list\)$"),
+        ("video", "positions", np.zeros(9), r"^video\.positions = \[0, 0, 0, 0, 0, 0, 0, 0, 0\]: expected a list of 3 or more \[x, y, z\] camera positions, one per frame \(an array of shape \(9,\), not a list\)$"),
+    ],
+)
+def test_rig_from_dict_names_what_is_no_list(section, key, value, message):
+    d = copy.deepcopy(BASE)
+    d[section][key] = value
+    if section == "video" and key != "velocity":
+        del d["video"]["velocity"]
+    with pytest.raises(RigError, match=message):
+        rig_from_dict(d)
+
+
+@pytest.mark.parametrize(
+    ("direction", "unit", "axis"),
+    [
+        ([1e-170, 0.0, 0.0], [1.0, 0.0, 0.0], "x"),  # was [inf, nan, nan] with RuntimeWarnings (its square underflows), then refused
+        ([0.0, 5e-324, 0.0], [0.0, 1.0, 0.0], "y"),
+        ([1e300, 0.0, 0.0], [1.0, 0.0, 0.0], "x"),
+        ([1e200, 1e200, 0.0], [0.5**0.5, 0.5**0.5, 0.0], None),  # was [0, 0, 0] (its square overflows)
+        ([1e308, -1e308, 1e308], [3**-0.5, -(3**-0.5), 3**-0.5], None),
+    ],
+)
+def test_stereo_direction_of_any_magnitude_is_normalised(direction, unit, axis):
+    d = copy.deepcopy(BASE)
+    d["stereo"] = {"baseline": 1.0, "direction": direction}
+    rig = rig_from_dict(d)
+    np.testing.assert_allclose(rig.stereo.direction, unit, rtol=1e-15, atol=0)
+    if axis is not None:
+        assert stereo_options_from_rig(rig)["axis"] == axis
+    else:
+        with pytest.raises(RigError, match=r"^stereo\.direction = \[0\.57735|^stereo\.direction = \[0\.707107, 0\.707107, 0\]"):
+            stereo_options_from_rig(rig)
+    text = rig_to_toml(rig)  # was "direction = [inf, nan, nan]", which no TOML reader takes
+    assert "nan" not in text and "inf" not in text
+    assert rig_from_dict(tomllib.loads(text)) == rig
+    # a StereoSpec built by hand with such a direction is read by its direction too (its norm overflowed: a RuntimeWarning)
+    from nfdepth.rig import StereoSpec
+
+    built = dataclasses.replace(rig, stereo=StereoSpec(baseline=1.0, direction=np.array(direction)))
+    if axis is not None:
+        assert stereo_options_from_rig(built)["axis"] == axis
+
+
+@pytest.mark.parametrize(
+    ("frame", "error", "message"),
+    [
+        (np.zeros(200), ValueError, r"^frames\[0\] must be a 2-D grey image \(rows, cols\), got shape \(200,\)$"),
+        (None, TypeError, r"^frames\[0\] must be a numeric 2-D array, got dtype object$"),
+        ("I1.png", TypeError, r"^frames\[0\] must be a numeric 2-D array, got dtype <U6$"),
+        (np.zeros((200, 200, 3)), ValueError, r"^frames\[0\] must be a 2-D grey image \(rows, cols\), got shape \(200, 200, 3\); convert colour to grey first"),
+    ],
+)
+def test_dynamic_stereo_from_rig_checks_the_frames_as_dynamic_stereo_does(frame, error, message):
+    """A 1-D, None or text frame was an IndexError (tuple index out of range) from the size check: now dynamic_stereo's message."""
+    rig = rig_from_dict(BASE)
+    with pytest.raises(error, match=message):
+        dynamic_stereo_from_rig([frame] + [np.zeros((200, 200))] * 4, rig)
+    with pytest.raises(ValueError, match=r"^image I1 must be a 2-D grey image \(rows, cols\), got shape \(200,\)$"):
+        rig.check_image_shape((200,), what="image I1")
+
+
+def test_dynamic_cli_refuses_points_beyond_float32_before_writing(tmp_path, capsys, paper_pngs):
+    """Depths up to 2e37 fit float32, but X = x Z of points 120 focal lengths off the axis does not: --ply cast them to inf
+    (a raw "overflow encountered in cast" warning) and dropped them, 141 points against the 494 of --csv. Now one line, exit 2,
+    nothing written."""
+    rig = tmp_path / "far.toml"
+    rig.write_text(
+        "[camera]\nfocal_px = 1.0\nwidth_px = 200\nheight_px = 200\ncx_px = 80.0\ncy_px = 120.0\n"
+        "[motion]\nvelocity = [1e30, 0, 0]\nframe_interval = 1e7\n"
+    )
+    outs = ["--out", tmp_path / "z.npy", "--csv", tmp_path / "z.csv", "--ply", tmp_path / "z.ply"]
+    code, out, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", rig, *outs)
+    assert (code, out) == (2, "")
+    assert re.fullmatch(
+        r"nfdepth: error: a point coordinate of [0-9.]+e\+39 does not fit a float32 output \(about 1e-45 to 3\.4e38\): a \.ply file"
+        r" stores float32: give the rig's speeds \(motion\.velocity\) in a unit that keeps the points in that range\n",
+        err,
+    ), err
+    assert not any((tmp_path / n).exists() for n in ("z.npy", "z.csv", "z.ply"))
+    code, _, err = run_cli(capsys, "dynamic", *paper_pngs, "--rig", rig, *outs[:4])  # without --ply: the depths fit
+    assert code == 0, err

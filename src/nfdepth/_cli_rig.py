@@ -194,6 +194,10 @@ def _cmd_dynamic(args) -> int:
     hint = "give the rig's focal length and speeds in units that keep depths in that range"
     to_float32_map(result.depth[result.valid], what="a depth", hint=hint)  # the maps, the point cloud
     to_float32_map(result.depth_std[result.valid], what="a depth standard deviation", hint=hint)
+    ok = result.valid
+    if "ply" in outs:  # X = x Z and Y = y Z may overflow float32 where Z does not (points far off the axis)
+        ply_hint = "a .ply file stores float32: give the rig's speeds (motion.velocity) in a unit that keeps the points in that range"
+        points = to_float32_map(result.points[ok], what="a point coordinate", hint=ply_hint)
     depth, std = edge_depth_maps(result)
     write_array(outs["out"], depth, force=args.force)
     if "uncertainty" in outs:
@@ -201,7 +205,6 @@ def _cmd_dynamic(args) -> int:
     if "preview" in outs:
         write_colormap_png(outs["preview"], depth, force=args.force)
     write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=_unit(args))
-    ok = result.valid
     if "ply" in outs:
         img = read_image(args.images[2], grey=False, dtype=None)
         if any(rig.distortion):  # colours on the undistorted grid of the points, as the depths (each channel as the grey I3)
@@ -214,7 +217,7 @@ def _cmd_dynamic(args) -> int:
         img = to_rgb8(img)  # 16-bit or float input: stretched to 8 bits
         ii = np.floor(result.rows[ok]).astype(int)
         jj = np.floor(result.cols[ok]).astype(int)
-        write_ply(outs["ply"], result.points[ok].astype(np.float32), colors=img[ii, jj], force=args.force)
+        write_ply(outs["ply"], points, colors=img[ii, jj], force=args.force)
     if "csv" in outs:
         lines = ["row,col,depth,depth_std"]
         lines += [f"{r:.2f},{c:.2f},{z:.6g},{s:.6g}" for r, c, z, s in zip(result.rows[ok], result.cols[ok], result.depth[ok], result.depth_std[ok])]

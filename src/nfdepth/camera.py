@@ -126,12 +126,16 @@ class PinholeCamera:
     cy_px: float | None = None
 
     def __post_init__(self) -> None:
-        check_within(
+        # Stored as Python numbers: a 0-d array (or NumPy scalar) given for one would make the camera unhashable.
+        focal = check_within(
             "focal_px",
             self.focal_px,
             advice="expected a focal length in pixels in that range (beyond it the normalised coordinates and depths overflow or vanish in float arithmetic)",
         )
+        object.__setattr__(self, "focal_px", focal)
         check_image_size(self)
+        object.__setattr__(self, "width_px", int(self.width_px))
+        object.__setattr__(self, "height_px", int(self.height_px))
         if self.cx_px is None:
             object.__setattr__(self, "cx_px", (self.width_px - 1) / 2.0)
         if self.cy_px is None:
@@ -143,6 +147,7 @@ class PinholeCamera:
             if not abs(value - centre) <= reach:
                 msg = f"{name} = {value:g} px: expected {_principal_point_expected(centre, reach)}"
                 raise ValueError(msg)
+            object.__setattr__(self, name, value)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -196,6 +201,13 @@ class PinholeCamera:
         return np.stack(np.broadcast_arrays(x * depth, y * depth, depth), axis=-1)
 
 
+def _read_only_copy(vec: np.ndarray) -> np.ndarray:
+    """A copy of ``vec`` that cannot be written to (the field of a frozen dataclass: neither its caller nor its user can change it)."""
+    out = np.array(vec, dtype=float)
+    out.flags.writeable = False
+    return out
+
+
 @dataclass(frozen=True)
 class RigidMotion:
     """Instantaneous rigid motion ``(V, Omega)`` of the scene relative to a camera.
@@ -204,14 +216,18 @@ class RigidMotion:
     ``Omega`` in radians per unit time, both in camera coordinates, so that a
     scene point moves as ``dP/dt = V + Omega x P`` (paper eq. 1). ``|Omega|``
     is at most 1e30 (the upper end of the speeds' range).
+
+    Immutable: both are read-only copies of the vectors given. Two motions are
+    equal when their vectors are (``np.array_equal``), and equal motions hash
+    alike (a motion can be a set member or a dict key).
     """
 
     translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
     rotation: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "translation", as_vector3("translation", self.translation))
-        rotation = as_vector3("rotation", self.rotation)
+        object.__setattr__(self, "translation", _read_only_copy(as_vector3("translation", self.translation)))
+        rotation = _read_only_copy(as_vector3("rotation", self.rotation))
         hi = UNIT_SCALE_RANGE[1]
         if _magnitude(rotation) > hi:
             msg = (
@@ -221,6 +237,19 @@ class RigidMotion:
             )
             raise ValueError(msg)
         object.__setattr__(self, "rotation", rotation)
+
+    def __eq__(self, other) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return np.array_equal(self.translation, other.translation) and np.array_equal(self.rotation, other.rotation)
+
+    def __hash__(self) -> int:
+        # the values the equality compares (0.0 and -0.0 are equal and hash alike; the vectors are finite)
+        return hash((self.__class__, tuple(self.translation.tolist()), tuple(self.rotation.tolist())))
+
+    def __reduce__(self):
+        # copies and pickles are built as new motions (read-only vectors), not by filling in the fields
+        return (self.__class__, (self.translation, self.rotation))
 
     @classmethod
     def about_center(cls, *, rotation, center, translation=(0.0, 0.0, 0.0)) -> RigidMotion:

@@ -58,7 +58,9 @@ from ._validate import (
     as_image,
     as_path,
     check_disparity_offset,
+    check_frame_size,
     check_int,
+    float_dtype,
 )
 from .camera import (
     MAX_ROTATION_PER_FRAME_DEG,
@@ -101,6 +103,8 @@ class RigError(NFDepthError):
 
 
 def _show(value: Any) -> str:
+    if isinstance(value, np.ndarray) and (value.ndim > 1 or value.dtype.kind not in "iuf"):  # given as a NumPy array: as given
+        return _show(value.tolist())
     if isinstance(value, np.ndarray):  # computed vectors (a unit direction): plain numbers, [0, 0, 1]
         return "[" + ", ".join(f"{float(v) + 0.0:g}" for v in value.ravel()) + "]"
     if isinstance(value, np.generic):
@@ -147,6 +151,28 @@ def _integer(table: dict, section: str, name: str) -> int:
     return value
 
 
+def _entries(value: Any, ndim: int = 1) -> list | None:
+    """The entries of a sequence: a list or tuple (a TOML array, or a dict built in Python), or a NumPy array of ``ndim``
+    dimensions (a calibration's); None for anything else (a str, a dict, a number)."""
+    if isinstance(value, (list, tuple)):
+        return list(value)
+    if isinstance(value, np.ndarray) and value.ndim == ndim:
+        return list(value)
+    return None
+
+
+def _not_a_sequence(value: Any) -> str:
+    """`` (a str, not a list)``: what a value that is no list, tuple or array is, for the end of a message refusing it."""
+    if isinstance(value, np.ndarray):
+        return f" (an array of shape {value.shape}, not a list)"
+    name = type(value).__name__
+    return f" ({'an' if name[0] in 'aeiou' else 'a'} {name}, not a list)"
+
+
+def _finite_numbers(values: list | None) -> bool:
+    return values is not None and all(_is_number(v) and math.isfinite(v) for v in values)
+
+
 def _vector(table: dict, section: str, name: str, *, required: bool = False, default=None):
     key = f"{section}.{name}"
     if name not in table:
@@ -154,9 +180,10 @@ def _vector(table: dict, section: str, name: str, *, required: bool = False, def
             raise RigError(f"{key} is missing: expected 3 numbers [x, y, z]")
         return default
     value = table[name]
-    if not isinstance(value, list) or len(value) != 3 or not all(_is_number(v) and math.isfinite(v) for v in value):
-        raise _fail(key, value, "3 finite numbers [x, y, z]")
-    return np.array(value, dtype=float)
+    items = _entries(value)
+    if items is None or len(items) != 3 or not _finite_numbers(items):
+        raise _fail(key, value, "3 finite numbers [x, y, z]" + ("" if items is not None else _not_a_sequence(value)))
+    return np.array([float(v) for v in items])
 
 
 def _check_scale(key: str, raw: Any, magnitude: float, what: str) -> None:
@@ -216,8 +243,26 @@ def _exclusive(table: dict, section: str, names: tuple[str, ...], *, required: b
 _AXES = {"x": np.array([1.0, 0.0, 0.0]), "y": np.array([0.0, 1.0, 0.0])}
 
 
+def _unit(vec) -> np.ndarray | None:
+    """``vec`` (finite) scaled to length 1, or None for a zero (or non-finite) vector.
+
+    Scaled by its largest component first: ``vec / np.linalg.norm(vec)`` made [1e-170, 0, 0] [inf, nan, nan]
+    (its square underflows) and [1e200, 1e200, 0] [0, 0, 0] (it overflows).
+    """
+    vec = np.asarray(vec, dtype=float)
+    m = float(np.max(np.abs(vec))) if vec.size else 0.0
+    if not (m > 0 and math.isfinite(m)):
+        return None
+    vec = vec / m
+    return vec / np.linalg.norm(vec)
+
+
 # ----------------------------------------------------------------- poses
 
+
+#: A poses file's frame indices lie below this (2**53): every whole number below it is exact as a float (an
+#: index is read as one, "12" or "1.2e1"), and it is far beyond any video's length.
+FRAME_LIMIT = 2**53
 
 #: Largest orientation (rotation-vector length, degrees) a poses file or ``orientations_rad``
 #: may give: float64 keeps about 1e-10 degrees there; far beyond, the rotation is lost to rounding.
@@ -292,9 +337,10 @@ def load_poses(path) -> Poses:
     RigError
         A file that is not UTF-8 text or is empty, a header other than
         ``frame,x,y,z[,rx,ry,rz]``, no data rows, a row with another number
-        of columns, a frame that is not a whole number >= 0 or not strictly
-        increasing, a value that is not a finite number, or an orientation
-        of more than :data:`MAX_TURN_DEG` (1e6) degrees.
+        of columns, a frame that is not a whole number >= 0 and below
+        :data:`FRAME_LIMIT` (2**53) or not strictly increasing, a value that
+        is not a finite number, or an orientation of more than
+        :data:`MAX_TURN_DEG` (1e6) degrees.
     """
     path = as_path("path", path)
     if not path.is_file():
@@ -324,6 +370,11 @@ def load_poses(path) -> Poses:
             raise RigError(f"poses '{path}' line {line_no}: frame = {row[0]!r}: expected an integer frame index") from None
         if not frame_val.is_integer() or frame_val < 0:
             raise RigError(f"poses '{path}' line {line_no}: frame = {row[0]!r}: expected an integer frame index >= 0")
+        if frame_val >= FRAME_LIMIT:
+            raise RigError(
+                f"poses '{path}' line {line_no}: frame = {row[0]!r}: expected a frame index below {FRAME_LIMIT}"
+                " (2**53, where whole numbers stop being exact in floating point)"
+            )
         vals = []
         for name, text in zip(header[1:], row[1:]):
             try:
@@ -354,6 +405,12 @@ def load_poses(path) -> Poses:
 
 
 # ----------------------------------------------------------------- specs
+
+
+#: Largest ``motion.frame_interval``: the moving camera's images are two frame intervals apart, and
+#: :func:`nfdepth.pipelines.dynamic_stereo` takes their time step up to :data:`UNIT_SCALE_RANGE`'s end, so
+#: the interval up to half of it (as it checks ``frame_interval`` itself).
+MAX_FRAME_INTERVAL = 0.5 * UNIT_SCALE_RANGE[1]
 
 
 @dataclass(frozen=True, eq=False)
@@ -578,7 +635,10 @@ class Rig:
         return self._need("motion").frame_interval
 
     def check_image_shape(self, shape, what: str = "the images") -> None:
-        """Raise :class:`RigError` unless ``shape`` (rows, cols) matches ``[camera]``."""
+        """Raise :class:`RigError` unless ``shape`` (rows, cols) matches ``[camera]`` (``ValueError`` for a shape of fewer than 2 sizes)."""
+        if len(shape) < 2:
+            msg = f"{what} must be a 2-D grey image (rows, cols), got shape {tuple(shape)}"
+            raise ValueError(msg)
         rows, cols = int(shape[0]), int(shape[1])
         if (rows, cols) != self.camera.shape:
             src = f" ({self.source.name})" if self.source else ""
@@ -604,9 +664,14 @@ class Rig:
 def _parse_distortion(table, camera: PinholeCamera) -> tuple:
     if not isinstance(table, dict) or "distortion" not in table:
         return ()
-    d = table["distortion"]
-    if not isinstance(d, list) or len(d) not in (4, 5, 8) or not all(_is_number(v) and math.isfinite(v) for v in d):
-        raise _fail("camera.distortion", d, "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]")
+    raw = d = table["distortion"]
+    if isinstance(d, np.ndarray) and d.ndim == 2 and 1 in d.shape:  # cv2.calibrateCamera's (1, N) row (or a column)
+        d = d.ravel()
+    items = _entries(d)
+    if items is None or len(items) not in (4, 5, 8) or not _finite_numbers(items):
+        expected = "4, 5 or 8 finite numbers, OpenCV's [k1, k2, p1, p2, k3, k4, k5, k6]"
+        raise _fail("camera.distortion", raw, expected + ("" if items is not None else _not_a_sequence(raw)))
+    d = items
     fold = _radial_fold_px(d, camera)
     if fold is not None:
         reach = _corner_radius_px(camera)
@@ -661,8 +726,13 @@ def _parse_motion(table) -> MotionSpec:
     rotation = _vector(t, "motion", "rotation_deg", default=np.zeros(3))
     interval = _number(t, "motion", "frame_interval", required=False, positive=True, default=1.0)
     lo, hi = UNIT_SCALE_RANGE
-    if not lo <= interval <= hi:
-        raise _fail("motion.frame_interval", t["frame_interval"], f"a time step within {lo:g}..{hi:g} (give times in a unit that keeps it there, e.g. frames)")
+    if not lo <= interval <= MAX_FRAME_INTERVAL:
+        raise _fail(
+            "motion.frame_interval",
+            t["frame_interval"],
+            f"a time step within {lo:g}..{MAX_FRAME_INTERVAL:g} (the moving camera's images I1, I3, I5 are two intervals apart;"
+            " give times in a unit that keeps it there, e.g. frames)",
+        )
     turn = _magnitude(rotation) * interval
     if turn > MAX_ROTATION_PER_FRAME_DEG:
         raise _fail(
@@ -728,10 +798,9 @@ def _parse_stereo(table) -> StereoSpec:
     which = _exclusive(t, "stereo", ("axis", "direction"), required=False)
     axis = None
     if which == "direction":
-        direction = _vector(t, "stereo", "direction")
-        if not np.any(direction):
+        direction = _unit(_vector(t, "stereo", "direction"))
+        if direction is None:
             raise _fail("stereo.direction", t["direction"], "a non-zero direction of travel")
-        direction = direction / np.linalg.norm(direction)
     else:
         axis = t.get("axis", "x")
         if axis not in _AXES:
@@ -744,9 +813,12 @@ def _parse_stereo(table) -> StereoSpec:
     disparity_range = None
     if "disparity_range_px" in t:
         r = t["disparity_range_px"]
-        ok = isinstance(r, list) and len(r) == 2 and all(_is_number(v) and math.isfinite(v) for v in r)
-        if not ok or not r[0] < r[1]:
-            raise _fail("stereo.disparity_range_px", r, "[smallest, largest] disparity in px per unit position, two finite numbers, smallest first")
+        items = _entries(r)
+        ok = items is not None and len(items) == 2 and _finite_numbers(items)
+        if not ok or not items[0] < items[1]:
+            expected = "[smallest, largest] disparity in px per unit position, two finite numbers, smallest first"
+            raise _fail("stereo.disparity_range_px", r, expected + ("" if items is not None else _not_a_sequence(r)))
+        r = items
         disparity_range = (float(r[0]), float(r[1]))
     offset = 0.0
     if "disparity_offset_px" in t:
@@ -764,8 +836,10 @@ def _stereo_positions(t: dict, key: str):
     if key not in t:
         return None
     p = t[key]
-    if not isinstance(p, list) or len(p) < 2 or not all(_is_number(v) and math.isfinite(v) for v in p):
-        raise _fail(f"stereo.{key}", p, "a list of 2 or more finite numbers (units of the baseline)")
+    items = _entries(p)
+    if items is None or len(items) < 2 or not _finite_numbers(items):
+        raise _fail(f"stereo.{key}", p, "a list of 2 or more finite numbers (units of the baseline)" + ("" if items is not None else _not_a_sequence(p)))
+    p = items
     if not all(b > a for a, b in zip(p, p[1:])):
         raise _fail(f"stereo.{key}", p, "strictly increasing positions (views ordered along the baseline)")
     return tuple(float(v) for v in p)
@@ -782,12 +856,12 @@ def _parse_video(table, base: Path | None) -> VideoSpec:
         return VideoSpec(velocity=v)
     if which == "positions":
         p = t["positions"]
-        ok = isinstance(p, list) and len(p) >= 3 and all(
-            isinstance(r, list) and len(r) == 3 and all(_is_number(v) and math.isfinite(v) for v in r) for r in p
-        )
-        if not ok:
-            raise _fail("video.positions", p, "a list of 3 or more [x, y, z] camera positions, one per frame")
-        positions = np.asarray(p, dtype=float)
+        outer = _entries(p, ndim=2)
+        rows = [_entries(r) for r in outer or ()]
+        if outer is None or len(rows) < 3 or not all(r is not None and len(r) == 3 and _finite_numbers(r) for r in rows):
+            expected = "a list of 3 or more [x, y, z] camera positions, one per frame"
+            raise _fail("video.positions", p, expected + ("" if outer is not None else _not_a_sequence(p)))
+        positions = np.array([[float(v) for v in r] for r in rows])
         _check_steps(positions, "video.positions")
         return VideoSpec(positions=positions)
     path = t["poses"]
@@ -1027,11 +1101,9 @@ def stereo_options_from_rig(rig: Rig, *, n_views: int | None = None, n_column_vi
     where = f"rig '{rig.source}': " if rig.source is not None else ""
     axis = s.axis
     if axis is None:
-        direction = np.asarray(s.direction, dtype=float)
-        length = np.linalg.norm(direction)
-        unit = direction / length if np.isfinite(length) and length > 0 else direction  # (a hand-built spec: a file's is normalised)
+        unit = _unit(s.direction)  # (a hand-built spec: a file's is normalised)
         for name, vec in _AXES.items():
-            if np.allclose(unit, vec, atol=1e-9):
+            if unit is not None and np.allclose(unit, vec, atol=1e-9):
                 axis = name
         if axis is None:
             expected = "[1, 0, 0] or [0, 1, 0] for nfdepth stereo (order the views so the camera moves toward +x or +y)"
@@ -1101,10 +1173,13 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
     Raises
     ------
     TypeError
-        An option the rig gives or an unknown option.
+        An option the rig gives or an unknown option; a frame that is not
+        numbers (None, a path, text), named ``frames[k]`` (0-based) as
+        :func:`~nfdepth.pipelines.dynamic_stereo` names it.
     ValueError
         Not exactly 5 frames, or frames that
-        :func:`~nfdepth.pipelines.dynamic_stereo` refuses.
+        :func:`~nfdepth.pipelines.dynamic_stereo` refuses (not 2-D, ...),
+        checked before their size.
     RigError
         A frame whose size is not ``[camera]``'s, or a rig without ``[motion]``.
     """
@@ -1114,10 +1189,15 @@ def dynamic_stereo_from_rig(frames, rig: Rig, **options):
     frames = list(frames)
     if len(frames) != 5:
         raise ValueError(f"dynamic stereo needs exactly 5 images I1..I5, got {len(frames)}")
-    for k, f in enumerate(frames, 1):
-        rig.check_image_shape(np.shape(f), what=f"image I{k}")
-    if any(rig.distortion):  # checked as dynamic_stereo checks them: the undistortion reads grey images only
-        frames = [rig.undistort(as_image(f"frames[{k}]", f)) for k, f in enumerate(frames)]
+    dtype = float_dtype(options.get("dtype", np.float32))
+    checked = []
+    for k, f in enumerate(frames):  # checked as dynamic_stereo checks them (a 1-D, None or text frame), then their size
+        check_frame_size(f"frames[{k}]", np.shape(f))
+        checked.append(as_image(f"frames[{k}]", f, dtype))
+        rig.check_image_shape(checked[-1].shape, what=f"image I{k + 1}")
+    frames = checked
+    if any(rig.distortion):  # the undistortion reads grey images only
+        frames = [rig.undistort(f) for f in frames]
     return dynamic_stereo(frames, camera=rig.camera, relative_motion=rig.relative_motion(), frame_interval=rig.frame_interval, **options)
 
 
