@@ -362,7 +362,7 @@ def test_cli_depth_range_errors_name_the_depths(plane_files, tmp_path, capsys):
 
     scale = ["--focal-px", "100", "--baseline", "0.1"]
     for extra, message in (
-        (["--depth-range", "0.4", "0.41"], r"^nfdepth: error: --depth-range 0\.4 0\.41 \(disparities 24\.39\.\.25 px\): disparity_range_px = \(24\.3902, 25\) is narrower than two candidate steps .*; widen or move the depth range$"),
+        (["--depth-range", "0.4", "0.41"], r"^nfdepth: error: --depth-range 0\.4 0\.41 \(disparities 24\.39\.\.25 px\): that range is narrower than two candidate steps \(1 px per unit of position; --cost-step-px 0\.5 px\): .*; widen or move the depth range$"),
         (["--depth-range", "1e-320", "1"], r"^nfdepth: error: --depth-range \([0-9.e+-]+, 1\) gives the disparities 10\.\.inf px: NEAR is too near for a finite disparity; give a larger NEAR$"),
     ):
         code = main(["stereo", *plane_files, *scale, *extra, "--out", str(tmp_path / "d.pfm")])
@@ -476,6 +476,31 @@ def test_cli_bad_depth_range_before_reading_the_views(tmp_path, capsys, extra, m
     code = main(["stereo", *missing, *extra, "--out", str(tmp_path / "d.pfm")])
     _, err = capsys.readouterr()
     assert code == 2 and err.strip() == f"nfdepth: error: {message}"
+
+
+def test_cli_disparity_range_errors_name_the_options(plane_files, tmp_path, capsys):
+    """A range the library refuses is told in the command line's words: the option and its values as given, the step
+    as --cost-step-px (before: "disparity_range_px = (0, 0.5) is narrower ... cost_step_px = 0.5 px"), the rig
+    file's key where the range is the rig's; an error of another option under --depth-range is not the range's."""
+    from nfdepth.cli import main
+
+    out = str(tmp_path / "d.pfm")
+    rig = _rig_file(tmp_path, "disparity_range_px = [0, 0.5]\n")
+    step = "two candidate steps ({} px per unit of position; --cost-step-px {} px): expected a range wide enough to tell a match from its neighbours"
+    for extra, line in (
+        (["--disparity-range", "0", "0.5"], "--disparity-range 0 0.5 is narrower than " + step.format(1, 0.5)),
+        (["--disparity-range", "0", "1", "--cost-step-px", "1"], "--disparity-range 0 1 is narrower than " + step.format(2, 1)),
+        (["--disparity-range", "0", "0.05", "--positions", "0", "10", "20"], "--disparity-range 0 0.05 is narrower than " + step.format(0.1, 0.5)),
+        (["--disparity-range", "500", "1000"], "--disparity-range 500 1000 lies beyond the image: a disparity above 79 px per unit of position moves every pixel out of every view"),
+        (["--rig", rig], "the rig file's disparity_range_px = [0, 0.5] is narrower than " + step.format(1, 0.5)),
+        (
+            ["--depth-range", "1", "10", "--focal-px", "100", "--baseline", "1", "--positions", "2", "1", "0"],
+            "--positions must be strictly increasing (views ordered along the baseline), got [2.0, 1.0, 0.0]",
+        ),
+    ):
+        code = main(["stereo", *plane_files, *extra, "--out", out])
+        printed, err = capsys.readouterr()
+        assert (code, printed, err) == (2, "", f"nfdepth: error: {line}\n")
 
 
 def _rig_file(tmp_path, stereo_lines):

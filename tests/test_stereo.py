@@ -1094,6 +1094,32 @@ def test_fill_background_takes_the_farther_neighbour_along_the_baseline():
         fill_background(d[0])
 
 
+def test_fill_background_fills_only_the_nan_pixels_of_a_real_map():
+    """Only NaN is unknown. Before, an infinite value was taken for a hole and overwritten (no error), 1e300 overflowed
+    the float32 cast to inf and was filled (a RuntimeWarning), text gave NumPy's "could not convert string to float"
+    and a complex map lost its imaginary part with a ComplexWarning. Now each is refused, naming ``disparity``."""
+    from nfdepth.stereo import fill_background
+
+    nan = np.nan
+    for bad in (np.inf, -np.inf):
+        d = np.array([[1.0, bad, nan, 2.0]])
+        with pytest.raises(ValueError, match=rf"^disparity has 1 infinite value\(s\) \(the first {bad:g} at row 0, column 1\): expected finite disparities in px, NaN where unknown"):
+            fill_background(d)
+        with pytest.raises(ValueError, match="^disparity has 1 infinite value"):
+            fill_background(d.T, axis="y")
+    with pytest.raises(ValueError, match=r"^disparity has 1 value\(s\) beyond float32's range \(largest \|value\| 1e\+300, float32 holds up to 3\.4e\+38\): expected disparities in px"):
+        fill_background(np.array([[1e300, nan]]))
+    for bad, dtype in (("abc", "<U3"), (np.ones((3, 3), complex), "complex128"), (np.array([[1.0, None]], dtype=object), "object"), (None, "object")):
+        with pytest.raises(TypeError, match=f"^disparity must be real numbers, got dtype {dtype}$"):
+            fill_background(bad)
+    # the largest float32 is a value, float64 and lists are taken as float32: the holes take the farther (smaller) neighbour
+    big = float(np.finfo(np.float32).max)
+    out, mask = fill_background([[big, nan, 3.0, nan], [nan, -big, nan, nan]])
+    assert out.dtype == np.float32
+    np.testing.assert_array_equal(out, np.array([[big, 3.0, 3.0, 3.0], [-big, -big, -big, -big]], np.float32))
+    np.testing.assert_array_equal(mask, [[False, True, False, True], [True, False, True, True]])
+
+
 def test_filled_result_covers_the_occluded_strip_with_the_background():
     """A foreground square (disparity 6) in front of a plane (2), two views: the background
     strips beside the square that the other view cannot see are filled with the

@@ -16,6 +16,7 @@ the bounds are about twice the new ones and far below the old.
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -135,3 +136,82 @@ def test_both_sides_compete_only_where_the_sides_reach_unequally():
     assert _both_sides(t, 1, 2.0, shift_px=0.5)[3] == pytest.approx(2.0 * penalty)
     # with two views on the near side, its farther one counts
     assert _both_sides(np.array([-2.0, -1.0, 0.0, 5.0]), 2, 2.0, shift_px=0.5)[3] == pytest.approx((2.0 - 1.0) * 0.1 * (1.0 - 2.0 / 5.0) * 2.0)
+
+
+def _plane_row(d, positions, ref, *, seed, shape=(100, 200), noise=1.0):
+    """Views of a fronto-parallel plane at ``d`` px per unit of position, exact: the view at ``positions[k]`` sees the
+    reference's ``(r, c)`` at ``(r, c - (positions[k] - positions[ref]) d)``. Texture: 40 sinusoids of wavelengths
+    6-30 px in all directions, ``noise`` grey levels of Gaussian noise."""
+    rng = np.random.default_rng(seed)
+    n = 40
+    wavelength, angle = rng.uniform(6.0, 30.0, n), rng.uniform(0.0, np.pi, n)
+    ky, kx = 2 * np.pi * np.sin(angle) / wavelength, 2 * np.pi * np.cos(angle) / wavelength
+    phase = rng.uniform(0.0, 2 * np.pi, n)
+    noise_rng = np.random.default_rng(seed + 100)
+    rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]].astype(float)
+    views = []
+    for p in positions:
+        c = cols + (p - positions[ref]) * d
+        image = 100.0 + 40.0 / np.sqrt(n / 2) * np.sin(ky * rows[..., None] + kx * c[..., None] + phase).sum(-1)
+        views.append((image + noise_rng.normal(0.0, noise, shape)).astype(np.float32))
+    return views
+
+
+@pytest.mark.parametrize(
+    ("positions", "ref", "seed", "misstated", "far"),
+    [
+        # before: view 3 measured 0.46, 0.43, 0.45 of the typical value and the row warned "about 0, 1, 2, 4.2" (seed 3)
+        ([0.0, 1.0, 2.0, 8.0], 1, 3, 7.0, "8"),
+        ([0.0, 1.0, 2.0, 8.0], 1, 11, 7.0, "8"),
+        ([0.0, 1.0, 2.0, 8.0], 1, 28, 10.0, "8"),
+        # before: view 4 measured 0.88, 0.56, 0.66 (in steps of the nearest spacing 0.5 the views lie at 0, 2, 3, 8, 18)
+        ([0.0, 1.0, 1.5, 4.0, 9.0], 2, 3, 8.0, "18"),
+        ([0.0, 1.0, 1.5, 4.0, 9.0], 2, 12, 8.0, "18"),
+        ([0.0, 1.0, 1.5, 4.0, 9.0], 2, 17, 8.0, "18"),
+    ],
+)
+def test_unequally_spaced_views_warn_only_where_misplaced(positions, ref, seed, misstated, far):
+    """A plane at 8 px per unit of position, views placed exactly where their positions say but unequally far apart: the
+    map is right (median error 0.002-0.007 px) and no warning comes. Before, each view paired with the reference alone
+    was searched over 32 candidates, 2.9 px of the far view apart at the check's level (where the texture's shortest
+    wavelength is 3 px): its match fell between two candidates, it locked onto an alias and the row warned that the views
+    do not fit their positions. The same views with the far one misstated still warn, with its measured scale the
+    analytic ratio of its true to its stated distance from the reference and its shift putting it where it is."""
+    d = 8.0
+    views = _plane_row(d, positions, ref, seed=seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = static_stereo(views, reference=ref, positions=positions)
+    ok = np.isfinite(r.disparity)
+    assert ok.mean() > 0.95
+    assert np.median(np.abs(r.disparity[ok] - d)) < 0.02
+    stated = [*positions[:-1], misstated]
+    with pytest.warns(UserWarning, match="^the views do not fit the positions given") as caught:
+        static_stereo(views, reference=ref, positions=stated)
+    (said,) = [str(w.message) for w in caught]
+    ratio = (positions[-1] - positions[ref]) / (misstated - positions[ref])  # 7/6 for 7 instead of 8, 7/9 for 10
+    scale = float(re.search(rf"view {len(positions) - 1} (-?[0-9.]+) times its typical value", said).group(1))
+    assert abs(scale - ratio) < 0.05, said  # measured 1.14, 0.76 (the near pairs' sub-sample bias: 2 %)
+    where = re.search(r"Their shifts put them at about (.*), in the order given", said).group(1).split(", ")
+    assert abs(float(where[-1]) - float(far)) < 0.05 * float(far), said  # measured 7.8-7.9 for 8, 17.7-17.8 for 18
+
+
+def test_a_view_far_beyond_the_others_costs_no_more_memory():
+    """Views at 0, 1 and 30000 (a plane at 3 px per unit: the far view shares nothing with the reference): the map comes
+    from the near pair. The check of the positions paired each view with the reference and counted a match unique
+    against candidates 1 px of the nearest view away, 30000 px of the far one: its winner-take-all window held 60000
+    candidates, 1.4 GB (at 1e6 a MemoryError, 42.9 GiB) and 4 s. Now 1 px of its own view: 8 MB peak, 0.1 s."""
+    import tracemalloc
+
+    positions = [0.0, 1.0, 30000.0]
+    views = _plane_row(3.0, positions, 1, seed=3, shape=(120, 160))
+    static_stereo(views[:2], reference=1)  # compiled, its caches filled
+    tracemalloc.start()
+    try:
+        r = static_stereo(views, reference=1, positions=positions)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 100e6, peak  # measured 8.4 MB (1389 MB before)
+    ok = np.isfinite(r.disparity)
+    assert ok.mean() > 0.9 and np.median(np.abs(r.disparity[ok] - 3.0)) < 0.02

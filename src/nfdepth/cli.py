@@ -459,12 +459,25 @@ def _positive(name: str, value):
     return float(value)
 
 
-def _as_option(exc: ValueError, parameter: str, option: str) -> ValueError:
-    """A library error that opens with ``parameter = ...``, told as the command line's ``option`` (else ``exc`` itself)."""
+def _as_option(exc: ValueError, parameter: str, option: str, *, value: str | None = None, within=()) -> ValueError:
+    """A library error that opens with ``parameter = ...``, told as the command line's ``option`` (else ``exc`` itself).
+
+    A ``row: `` / ``column: `` before it (:func:`nfdepth.xy_stereo.static_stereo_xy`) stays. ``value``: the
+    value as the command line gave it (``"0 0.5"`` for the library's ``(0, 0.5)``), in place of the
+    library's ("" drops it); ``within``: ``(parameter, option)`` pairs that the rest of the message names
+    as ``parameter = ...``, told as their options too.
+    """
     text = str(exc)
-    if text.startswith(f"{parameter} = "):
-        return CLIError(f"{option} {text[len(parameter) + 3 :]}", EXIT_USAGE)
-    return exc
+    head = re.match(rf"^((?:row|column): )?{re.escape(parameter)} = ", text)
+    if head is None:
+        return exc
+    rest = text[head.end() :]
+    if value is not None:  # the library's value: a number, or a tuple or list of them
+        rest = re.sub(r"^(\([^)]*\)|\[[^\]]*\]|\S+) ?", "", rest, count=1)
+    for name, told in within:
+        rest = re.sub(rf"\b{re.escape(name)} = ", f"{told} ", rest)
+    said = " ".join(part for part in (option, value, rest) if part)
+    return CLIError(f"{head.group(1) or ''}{said}", EXIT_USAGE)
 
 
 def _depth_range(value):
@@ -549,6 +562,8 @@ def _cmd_stereo(args) -> int:
     if args.cameras:
         from ._cli_calibrated import run_calibrated_stereo
 
+        if args.axis is None:  # not given: the row's direction comes from the cameras
+            args.axis = "x"
         return run_calibrated_stereo(args, CLIError)
     principal_point_given = [f"--{k.replace('_', '-')}" for k in ("cx_px", "cy_px") if getattr(args, k) is not None]
     rig = None
@@ -569,9 +584,7 @@ def _cmd_stereo(args) -> int:
                         stacklevel=2,
                     )
                 continue
-            given = getattr(args, key)
-            if key == "axis" and given == "x":
-                given = None  # the parser's default: the rig decides
+            given = getattr(args, key)  # (None: not given, the rig decides; --axis has no default until after the rig)
             if given is not None and opts.get(key) is not None and given != opts[key]:
                 if key in defaults:
                     where = f"{defaults[key]} unless the file gives it; set it in the file's {sections[key]}"
@@ -586,6 +599,8 @@ def _cmd_stereo(args) -> int:
                 in_rig = ", ".join(f"{v:g}" for v in rig_range)
                 raise CLIError(f"--disparity-range {given} contradicts the rig file's disparity_range_px = [{in_rig}]")
             args.disparity_range = rig_range
+    if args.axis is None:  # neither --axis nor the rig file's: a row along x
+        args.axis = "x"
     focal = _positive("--focal-px", args.focal_px)
     baseline = _positive("--baseline", args.baseline)
     if (focal is None) != (baseline is None):
@@ -712,10 +727,18 @@ def _cmd_stereo(args) -> int:
         files = (column if named and named.group(1) == "column_views" else args.views) if named else ()
         if named and int(named.group(2)) < len(files):
             raise CLIError(f"view '{files[int(named.group(2))]}' {named.group(3)}", EXIT_USAGE) from None
-        if depth_range is None:
-            raise _as_option(exc, "cost_step_px", "--cost-step-px") from None
-        lo, hi = args.disparity_range
-        raise CLIError(f"--depth-range {depth_range[0]:g} {depth_range[1]:g} (disparities {lo:.4g}..{hi:.4g} px): {exc}; widen or move the depth range") from None
+        # the search range and the step as the command line gave them, not the library's parameters
+        step = [("cost_step_px", "--cost-step-px")]
+        lo, hi = args.disparity_range if args.disparity_range is not None else (np.nan, np.nan)
+        if depth_range is not None:
+            told = _as_option(exc, "disparity_range_px", "that range", value="", within=step)
+            if told is not exc:  # (any other error is not the depth range's)
+                raise CLIError(f"--depth-range {depth_range[0]:g} {depth_range[1]:g} (disparities {lo:.4g}..{hi:.4g} px): {told}; widen or move the depth range") from None
+        elif rig is not None and opts.get("disparity_range_px") is not None:
+            exc = _as_option(exc, "disparity_range_px", "the rig file's disparity_range_px =", value=f"[{lo:g}, {hi:g}]", within=step)
+        else:
+            exc = _as_option(exc, "disparity_range_px", "--disparity-range", value=f"{lo:g} {hi:g}", within=step)
+        raise _as_option(exc, "cost_step_px", "--cost-step-px") from None
     filled = None
     if args.fill:
         from dataclasses import replace
@@ -868,7 +891,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--reference", type=int, default=None, metavar="K", help="0-based index of the view to compute (default: the middle one)")
     p.add_argument("--out", required=True, metavar="FILE", help="output .pfm, .tif or .npy (NaN where unknown)")
     p.add_argument("--positions", type=float, nargs="+", metavar="P", help="camera positions in units of the baseline (default 0 1 2 ...)")
-    p.add_argument("--axis", choices=("x", "y"), default="x", help="direction of the row (default x)")
+    p.add_argument("--axis", choices=("x", "y"), default=None, help="direction of the row (default: the rig file's axis, else x)")
     p.add_argument(
         "--column",
         nargs="+",

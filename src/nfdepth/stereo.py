@@ -164,12 +164,13 @@ measurement in a coarse-to-fine warping scheme:
    2.2 %). With three or more views, each view is paired with the
    reference alone in a coarse exhaustive search (:func:`_pair_scales`, at
    the coarsest level where the scene still moves 2 px per unit of position,
-   a few ms; 12-58 ms for seven to nine views at full size), and
+   candidates at most 1 px of the pair's view apart, a few ms; 12-120 ms for
+   seven to nine views at full size), and
    where their disparities per unit of position differ by more than 10 %
    (the median ratio per pixel, over the pixels every pair matches) or in
    sign, a warning says so and where their shifts put the views
    (:func:`_spacing_message`). On every real row the pairs agree within
-   0.97-1.02; Books views 3, 5, 6 give 1.34 and 0.66, "about 0, 2, 3".
+   0.98-1.02; Books views 3, 5, 6 give 1.34 and 0.66, "about 0, 2, 3".
 4. At the finest level, before the final measurement, a smooth intensity
    offset of every warped view against the reference is estimated and
    removed (:func:`_photometric_offsets`, ``photometric_window_px``). Real
@@ -346,7 +347,7 @@ from ._exposure import match_exposures
 from ._quantile import median, percentile, percentiles
 from ._resample import remap_linear
 from ._scratch import STEREO as _SCRATCH
-from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, check_bool, check_depth_range, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_shape_rows_cols, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
+from ._validate import MAX_SCALE_PX, UNIT_SCALE_RANGE, _as_int, as_frames, as_real, check_bool, check_depth_range, check_disparity_offset, check_fraction, check_int, check_iterations, check_positive_finite, check_reach, check_scale_px, check_shape_rows_cols, check_threshold, check_view_distances, check_view_index, check_within, float_dtype
 from .depth import Reason
 from .edges import _no_edge_points_warning, select_edge_points
 from .normal_flow import _MATCHED_NEAR, _MATCHED_WIDE, GradientField, _cell_gradient, _cell_mean, gaussian_smooth
@@ -686,7 +687,9 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
     Parameters
     ----------
     disparity : array_like, shape (H, W)
-        Disparity, NaN where unknown.
+        Disparity, real numbers within float32's range, NaN where unknown
+        (the pixels filled). An infinite value is refused (``ValueError``):
+        it is neither a disparity nor the NaN of an unknown pixel.
     axis : {"x", "y"}
         Direction of the baseline.
 
@@ -694,16 +697,42 @@ def fill_background(disparity, *, axis: str = "x") -> tuple[np.ndarray, np.ndarr
     -------
     (ndarray float32, ndarray bool)
         The filled map and the mask of the pixels that were filled.
+
+    Raises
+    ------
+    TypeError
+        ``disparity`` is not real numbers (text, complex, objects).
+    ValueError
+        ``disparity`` is no 2-D map, holds an infinite value or one beyond
+        float32's range; ``axis`` is neither ``"x"`` nor ``"y"``.
     """
     if axis not in ("x", "y"):
         msg = f"axis must be 'x' or 'y', got {axis!r}"
         raise ValueError(msg)
-    d = np.asarray(disparity, dtype=np.float32)
-    if d.ndim != 2:
-        msg = f"disparity must be a 2-D map, got shape {d.shape}"
+    values = as_real("disparity", disparity)  # (NumPy dropped a complex map's imaginary part, read text as numbers)
+    if values.ndim != 2:
+        msg = f"disparity must be a 2-D map (rows, cols), got shape {values.shape}"
+        raise ValueError(msg)
+    infinite = np.isinf(values)
+    if infinite.any():
+        r, c = np.argwhere(infinite)[0]
+        msg = (
+            f"disparity has {int(np.count_nonzero(infinite))} infinite value(s) (the first {values[r, c]:g} at row {r}, column {c}): "
+            "expected finite disparities in px, NaN where unknown (the pixels filled)"
+        )
+        raise ValueError(msg)
+    with np.errstate(over="ignore"):
+        d = values.astype(np.float32)
+    beyond = np.isinf(d)
+    if beyond.any():
+        msg = (
+            f"disparity has {int(np.count_nonzero(beyond))} value(s) beyond float32's range (largest |value| "
+            f"{float(np.max(np.abs(values[beyond]))):.3g}, float32 holds up to {float(np.finfo(np.float32).max):.3g}): "
+            "expected disparities in px, NaN where unknown"
+        )
         raise ValueError(msg)
     lines = d if axis == "x" else d.T
-    known = np.isfinite(lines)
+    known = ~np.isnan(lines)
     n = lines.shape[1]
     pos = np.arange(n)
     left = np.maximum.accumulate(np.where(known, pos, -1), axis=1)
@@ -1696,14 +1725,27 @@ def _lost_match_message(share, searched, pyramids, t, ref, axis, *, as_given=Non
 # The check of the positions against the views (:func:`_spacing_message`): each view paired with the reference
 # alone, searched at the coarsest pyramid level (sides of at least _SPACING_MIN_SIDE px) where the scene's median
 # disparity per unit of position is still _SPACING_MIN_SHIFT_PX, over at most _SPACING_CANDIDATES candidates
-# from -1.5 to 3 times the field's largest |disparity| (within half the width); views whose scales (per-pixel
-# ratios to the pairs' median, :func:`_pair_scales`) differ by more than _SPACING_RATIO (or in sign) do not fit
-# their positions. Measured on every real row at full size (Middlebury 2005 three and seven views, Teddy three
-# and nine, Tsukuba three and five): 0.968-1.015; a view missing from a row of three (Books views 3, 5, 6 as
+# from -1.5 to 3 times the field's largest |disparity| (within half the width), or more where that would put
+# them more than _SPACING_STEP_PX px of the pair's view apart; views whose scales (per-pixel ratios to the
+# pairs' median, :func:`_pair_scales`) differ by more than _SPACING_RATIO (or in sign) do not fit their
+# positions. Measured on every real row at full size (Middlebury 2005 three and seven views, Teddy three and
+# nine, Tsukuba three and five): 0.984-1.020; a view missing from a row of three (Books views 3, 5, 6 as
 # 0, 1, 2) gives 1.34 and 0.66, two views swapped opposite signs.
+#
+# The step in px of the pair's view: a view k times as far from the reference as the nearest one shifts the
+# scene k times as far, so 32 candidates over its range (clipped to half the width either way) lay up to
+# width / 32 px of that view apart, 3 px at the coarse level of a 200 px wide row: the match of a texture finer
+# than that fell between two candidates and the pair locked onto an alias (a plane at 8 px per unit, views at
+# 0, 1, 2, 8 around view 1: view 3 measured 0.46 of the typical value and warned on a map 0.002 px right; the
+# real rows' far views 0.968). One px apart at most, a pair holds at most its level's width + 2 candidates
+# whatever the positions (the range spans at most the width in px of its view), and its uniqueness excludes
+# 1 px of its own view: the window of the winner-take-all stays 2-3 candidates, where 1 px of the nearest view
+# made it as many as the view is times farther (30000: 1.5 GB; 1e6: a MemoryError). Time: 12-120 ms for seven
+# to nine views at full size (was 12-58 ms).
 _SPACING_MIN_SIDE = 48
 _SPACING_MIN_SHIFT_PX = 2.0
 _SPACING_CANDIDATES = 32
+_SPACING_STEP_PX = 1.0
 _SPACING_RADIUS = 4
 _SPACING_RATIO = 1.1
 
@@ -1747,12 +1789,15 @@ def _pair_scales(pyramids, t, ref, d, *, spread, noise_floor, min_cost_margin, m
         # shifts within half the width; the pixels whose match, by the row's field, lies inside view k
         top = min(3.0 * reach, _SEARCH_REACH * w / abs(t[k]))
         bottom = -min(1.5 * reach, _SEARCH_REACH * w / abs(t[k]))  # (a view on the other side than its position says)
-        step = max(0.5 / abs(t[k]), (top - bottom) / _SPACING_CANDIDATES)  # half a px of this view, or fewer candidates
+        # half a px of this view, or fewer candidates, but never more than _SPACING_STEP_PX px of this view apart
+        step = max(0.5 / abs(t[k]), min((top - bottom) / _SPACING_CANDIDATES, _SPACING_STEP_PX / abs(t[k])))
         candidates = np.arange(bottom, top + step, step)
         source = cols - np.float32(t[k]) * field
         inside = (source >= _SPACING_RADIUS) & (source <= w - 1 - _SPACING_RADIUS)
         feats = [ref_feats, *_match_features([small[k]])]
-        dk, c_best, c_second = best_disparity(feats, np.array([0.0, t[k]]), 0, candidates, guide, radius=_SPACING_RADIUS, **match)
+        # unique: no other match as good more than 1 px of this view away (exclude_px is in px of the nearest view)
+        own = {**match, "exclude_px": match["exclude_px"] / abs(t[k])}
+        dk, c_best, c_second = best_disparity(feats, np.array([0.0, t[k]]), 0, candidates, guide, radius=_SPACING_RADIUS, **own)
         unique = inside & (_cost_margin(c_best, c_second, spread) >= min_cost_margin) & (dk > candidates[0] + step) & (dk < candidates[-1] - step)
         found[k] = dk
         measured = measured & unique
