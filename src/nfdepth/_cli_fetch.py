@@ -93,7 +93,7 @@ def _usage_hint(root: Path, sets) -> str:
         try:
             found = data_root()  # ../shared/data, or one beside the installation, comes first
         except DataNotFoundError:  # pragma: no cover - the folder was just filled
-            found = None
+            return use
         if found == root:
             return f"found automatically (from this folder): nfdepth evaluate {scene}"
         return f"{use}; without either, nfdepth finds '{found}' first"
