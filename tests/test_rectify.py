@@ -307,6 +307,7 @@ def test_cli_stereo_with_cameras_refuses_what_does_not_fit(capfd, tmp_path, row_
         (["--focal-px", "400", "--baseline", "0.1"], "--focal-px does not go with --cameras: the cameras give the focal lengths"),
         (["--positions", "0", "1", "2"], "--positions does not go with --cameras"),
         (["--axis", "y"], "--axis does not go with --cameras"),
+        (["--axis", "x"], "--axis does not go with --cameras"),  # given, it was ignored
         (["--disparity-range", "5", "9"], "--disparity-range does not go with --cameras: the rectified row's disparities are px per scene unit of position; give the depths to search with --depth-range"),
         (["--depth-range", "7", "5"], "--depth-range must be two depths NEAR FAR with 0 < NEAR < FAR (FAR may be inf: no far limit), got 7 5"),
         (["--depth-range", "0", "5"], "--depth-range must be two depths NEAR FAR with 0 < NEAR < FAR"),

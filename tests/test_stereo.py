@@ -1215,3 +1215,16 @@ def test_views_that_do_not_fit_their_positions_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # views in order at unequal steps, with their positions
         static_stereo(_row_at([-1.0, 0.0, 1.0, 2.5]), reference=1, positions=[0.0, 1.0, 2.0, 3.5])
+
+
+def test_a_run_that_leaves_no_pixel_says_so():
+    """sigma_px = 5000 on a 60 px wide row: edge points (of rounding-level structure), no disparity anywhere, and no warning."""
+    rng = np.random.default_rng(5)
+    scene = ndimage.gaussian_filter(rng.random((48, 80)) * 255, 1.5)
+    views = [np.ascontiguousarray(scene[:, 10 + k : 70 + k]) for k in range(3)]  # 1 px per view toward -col
+    with pytest.warns(UserWarning, match=r"^no pixel has a disparity \(UNCERTAIN \d+.*edge points among them\): the views gave no reliable match; check that they overlap and that sigma_px = 5000 px"):
+        res = static_stereo(views, reference=1, sigma_px=5000)
+    assert not np.isfinite(res.disparity).any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an ordinary run: no such warning
+        assert np.isfinite(static_stereo(views, reference=1).disparity).mean() > 0.5

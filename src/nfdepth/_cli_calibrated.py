@@ -38,7 +38,7 @@ def run_calibrated_stereo(args, CLIError) -> int:
         value = getattr(args, key, None)
         if value not in (None, False, []):
             raise CLIError(f"--{key.replace('_', '-')} does not go with --cameras: {why}")
-    if args.axis != "x":
+    if args.axis is not None:  # (also an explicit x: the row may run along any direction)
         raise CLIError("--axis does not go with --cameras: the row's direction comes from the cameras' centres")
     if args.threads is not None and args.threads < 1:
         raise CLIError(f"--threads must be an integer >= 1, got {args.threads}")

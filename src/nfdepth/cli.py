@@ -562,9 +562,7 @@ def _cmd_stereo(args) -> int:
     if args.cameras:
         from ._cli_calibrated import run_calibrated_stereo
 
-        if args.axis is None:  # not given: the row's direction comes from the cameras
-            args.axis = "x"
-        return run_calibrated_stereo(args, CLIError)
+        return run_calibrated_stereo(args, CLIError)  # (--axis, x or y, is refused there: the cameras give the row)
     principal_point_given = [f"--{k.replace('_', '-')}" for k in ("cx_px", "cy_px") if getattr(args, k) is not None]
     rig = None
     if args.rig:

@@ -2553,6 +2553,16 @@ def static_stereo(
             UserWarning,
             stacklevel=2,
         )
+    if n_ok == 0 and n_neg == 0 and selection.mask.any() and not (axis_message or lost_message or shift_message):
+        # edge points, yet no value anywhere, and no warning above says why (a run with nothing to show says so)
+        codes, counts = np.unique(reason, return_counts=True)
+        listed = ", ".join(f"{Reason(int(c)).name} {int(n)}" for c, n in sorted(zip(codes, counts), key=lambda cn: -cn[1]))
+        warnings.warn(
+            f"no pixel has a disparity ({listed}; {int(np.count_nonzero(selection.mask))} edge points among them): the views gave no "
+            f"reliable match; check that they overlap and that sigma_px = {sigma_px:g} px leaves the texture they share",
+            UserWarning,
+            stacklevel=2,
+        )
     bad = reason != Reason.OK
     disparity = np.where(bad, np.nan, disparity / unit).astype(np.float32)
     std = np.where(bad, np.nan, std / unit).astype(np.float32)
