@@ -2169,6 +2169,16 @@ def static_stereo(
         any option outside its range (the message names it and the range).
     TypeError
         An option of the wrong type (e.g. a float where a count is needed).
+
+    Warns
+    -----
+    NoEdgePointsWarning
+        No edge point (the rule that left none, :mod:`nfdepth.edges`).
+    UserWarning
+        Views that do not fit their positions, move along the other axis or
+        lose the scene beyond the search range (module docstring, step 3);
+        mostly negative disparities (views in the wrong order); edge points
+        but no pixel with a disparity, where no other warning says why.
     """
     start = time.perf_counter()
     float_dtype(dtype)
