@@ -158,6 +158,19 @@ def _reasons_text(reasons) -> str:
     return f"; {', '.join(parts)}" if parts else ""
 
 
+def undistorted_colours(rig, image: np.ndarray) -> np.ndarray:
+    """``image`` (grey or colour, as read) on the undistorted pixel grid of ``rig``'s camera, each channel as a grey
+    view is undistorted, in its own dtype (integers rounded and clipped); as it is where the rig has no distortion."""
+    if rig is None or not any(rig.distortion):
+        return image
+    planes = image.reshape(*image.shape[:2], -1)
+    planes = np.stack([rig.undistort(planes[..., c]) for c in range(planes.shape[-1])], axis=-1)
+    if image.dtype.kind in "iu":
+        info = np.iinfo(image.dtype)
+        planes = np.clip(np.rint(planes), info.min, info.max).astype(image.dtype)
+    return planes.reshape(image.shape)
+
+
 def _cmd_dynamic(args) -> int:
     from .cli import _check_finite
     from .io import (
@@ -206,15 +219,8 @@ def _cmd_dynamic(args) -> int:
         write_colormap_png(outs["preview"], depth, force=args.force)
     write_figures(outs, depth, std, title=f"edge points of I3 ({Path(args.images[2]).name})", unit=_unit(args))
     if "ply" in outs:
-        img = read_image(args.images[2], grey=False, dtype=None)
-        if any(rig.distortion):  # colours on the undistorted grid of the points, as the depths (each channel as the grey I3)
-            planes = img.reshape(*img.shape[:2], -1)
-            planes = np.stack([rig.undistort(planes[..., c]) for c in range(planes.shape[-1])], axis=-1)
-            if img.dtype.kind in "iu":
-                info = np.iinfo(img.dtype)
-                planes = np.clip(np.rint(planes), info.min, info.max).astype(img.dtype)
-            img = planes.reshape(img.shape)
-        img = to_rgb8(img)  # 16-bit or float input: stretched to 8 bits
+        # colours on the undistorted grid of the points, as the depths; 16-bit or float input stretched to 8 bits
+        img = to_rgb8(undistorted_colours(rig, read_image(args.images[2], grey=False, dtype=None)))
         ii = np.floor(result.rows[ok]).astype(int)
         jj = np.floor(result.cols[ok]).astype(int)
         write_ply(outs["ply"], points, colors=img[ii, jj], force=args.force)

@@ -763,14 +763,9 @@ def _cmd_stereo(args) -> int:
     std = to_float32_map(std, what="a standard deviation", hint=hint)
     k = _write_stereo_maps(args, outputs, values, std, filled)
     if args.ply:
-        cam_ref = read_image(args.views[reference], grey=False, dtype=None)
-        if rig is not None and any(rig.distortion):  # colours on the undistorted grid of the depth
-            planes = cam_ref.reshape(*cam_ref.shape[:2], -1)
-            info = np.iinfo(cam_ref.dtype) if cam_ref.dtype.kind in "iu" else None
-            planes = np.stack([rig.undistort(planes[..., c]) for c in range(planes.shape[-1])], axis=-1)
-            if info is not None:
-                planes = np.clip(np.rint(planes), info.min, info.max).astype(cam_ref.dtype)
-            cam_ref = planes.reshape(cam_ref.shape)
+        from ._cli_rig import undistorted_colours
+
+        cam_ref = undistorted_colours(rig, read_image(args.views[reference], grey=False, dtype=None))  # on the depth's grid
         pts, cols = depth_to_points(values, focal_px=focal, cx_px=args.cx_px, cy_px=args.cy_px, image=to_rgb8(cam_ref))  # 16-bit, float: scaled to 0..255
         write_ply(outputs[k], pts, colors=cols, force=args.force)
     valid = np.isfinite(values)

@@ -273,10 +273,14 @@ class RectifiedRow:
         return out.astype(np.float32), (np.asarray(std, dtype=np.float64)[r, c] * scale).astype(np.float32)
 
 
+def _centre_line(centres: np.ndarray) -> np.ndarray:
+    """The unit direction (either sign) of the least-squares line through the camera ``centres`` (N, 3)."""
+    return np.linalg.svd(centres - centres.mean(axis=0))[2][0]
+
+
 def _row_line(centres: np.ndarray, reference_rotation: np.ndarray) -> tuple[np.ndarray, str]:
     """The direction of the least-squares line through ``centres`` and the reference camera's axis nearest it ("x" or "y"), the direction pointing along that axis."""
-    dev = centres - centres.mean(axis=0)
-    line = np.linalg.svd(dev)[2][0]
+    line = _centre_line(centres)
     along = reference_rotation[:, :2].T @ line  # components along the reference's X and Y
     k = int(np.argmax(np.abs(along)))
     return (line if along[k] >= 0 else -line), "xy"[k]
@@ -901,10 +905,9 @@ def _line_direction(cameras) -> np.ndarray | None:
     if len(cameras) < 2 or not all(isinstance(c, CalibratedCamera) for c in cameras):
         return None
     centres = np.stack([c.position for c in cameras])
-    dev = centres - centres.mean(axis=0)
-    if not np.max(np.abs(dev)) > 0:
+    if not np.max(np.abs(centres - centres.mean(axis=0))) > 0:
         return None
-    return np.linalg.svd(dev)[2][0]
+    return _centre_line(centres)
 
 
 def _check_lines_apart(row_cameras, column_cameras) -> None:
